@@ -1,0 +1,270 @@
+//! The whole job of `deformesh run`: a case in, Algorithm 1, quality
+//! figures, and the output folder (mesh.msh, mesh.vtu, mesh.png,
+//! report.json, frames and an animation).
+//!
+//! Outputs are produced in memory and written only when the run has
+//! succeeded, each file atomically, so a failed run leaves nothing behind.
+
+use crate::case::{CaseError, Setup};
+use crate::deform::{DeformError, Deformation, Integrator};
+use crate::io::msh::{msh_string, MshError};
+use crate::io::vtu::{vtu_string, VtuError};
+use crate::io::write_atomic;
+use crate::mesh::{Point2, QuadMesh};
+use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
+use crate::render::{gif_bytes, png_bytes, render_mesh, RenderError, RenderOptions};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Errors of a run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The case is unusable.
+    #[error(transparent)]
+    Case(#[from] CaseError),
+    /// Algorithm 1 failed.
+    #[error(transparent)]
+    Deform(#[from] DeformError),
+    /// The finished mesh has invalid cells (never written as if fine).
+    #[error("the deformed mesh has {} invalid cell(s): {:?}", .0.len(), &.0[..(.0.len().min(20))])]
+    Invalid(Vec<usize>),
+    /// A picture failed.
+    #[error("picture: {0}")]
+    Render(#[from] RenderError),
+    /// A writer failed.
+    #[error("{0}")]
+    Msh(#[from] MshError),
+    /// A writer failed.
+    #[error("{0}")]
+    Vtu(#[from] VtuError),
+    /// The output folder could not be written.
+    #[error("cannot write `{path}`: {source}")]
+    Write {
+        /// The path.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+impl RunError {
+    /// The process exit code: 2 when the mesh tangles or is invalid, 1 otherwise.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Invalid(_) | RunError::Deform(DeformError::Tangled { .. }) | RunError::Deform(DeformError::InvalidStart(_)) => 2,
+            _ => 1,
+        }
+    }
+}
+
+/// Progress of a run, for a bar or log lines.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Pseudo-time reached.
+    pub t: f64,
+    /// Accepted steps.
+    pub steps: usize,
+    /// Halved steps so far.
+    pub halved: usize,
+}
+
+/// Seconds spent, by phase.
+#[derive(Clone, Debug, Serialize)]
+pub struct Timings {
+    /// Assembly and normalisation, all steps.
+    pub assembly_s: f64,
+    /// Symbolic analysis (once).
+    pub analyze_s: f64,
+    /// Numeric factorisation and triangular solves, all steps.
+    pub solve_s: f64,
+    /// Whole run, outputs included.
+    pub total_s: f64,
+}
+
+/// `report.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// Case name.
+    pub case: String,
+    /// 2 for quads.
+    pub dimension: usize,
+    /// Cells.
+    pub cells: usize,
+    /// Nodes.
+    pub nodes: usize,
+    /// Free unknowns of the LSFEM system.
+    pub unknowns: usize,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Nominal steps asked for.
+    pub nominal_steps: usize,
+    /// Accepted steps.
+    pub steps: usize,
+    /// Steps retried with half the step.
+    pub halved_steps: usize,
+    /// LSFEM solves.
+    pub solves: usize,
+    /// Validity and shape.
+    pub quality: MeshQuality,
+    /// What det J and the scaled Jacobian mean.
+    pub definitions: Definitions,
+    /// Number of invalid cells.
+    pub invalid_cells: usize,
+    /// J/f over cells.
+    pub jf: JfStats,
+    /// Max distance of nodes of moving parts to their target shape.
+    pub boundary_distance_max: f64,
+    /// c(1): f = c g.
+    pub normalisation_c: f64,
+    /// Solver used.
+    pub solver: String,
+    /// Seconds.
+    pub time: Timings,
+    /// Files written.
+    pub outputs: Vec<String>,
+}
+
+/// Definitions printed with the figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct Definitions {
+    /// det J.
+    pub det_j: &'static str,
+    /// Scaled Jacobian.
+    pub scaled_jacobian: &'static str,
+    /// J/f.
+    pub jf: &'static str,
+}
+
+/// The definitions used in every report.
+pub const DEFINITIONS: Definitions = Definitions {
+    det_j: "determinant of the bilinear map from the reference square [0,1]^2, at cell corners (Gmsh's [-1,1]^2 gives 1/4 of it)",
+    scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|), the sine of the corner angle",
+    jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2 Gauss); 1 is perfect",
+};
+
+/// Runs a prepared case; writes into `out_dir` only on success.
+pub fn run_setup(setup: Setup, out_dir: &Path, mut progress: impl FnMut(Progress)) -> Result<Report, RunError> {
+    let clock = Instant::now();
+    let Setup { name, mesh, parts, field, options, output } = setup;
+    let nominal_steps = options.steps;
+    let integrator = options.integrator;
+    let mut def = Deformation::new(mesh, parts, field, options)?;
+    // frames are drawn at the end, when the box around all of them is known
+    let every = (nominal_steps / 40).max(1);
+    let snapshot = |d: &Deformation| (d.t, d.mesh.nodes.clone(), d.jf_now());
+    let mut stills = Vec::new();
+    let mut anim = if output.animation { vec![snapshot(&def)] } else { Vec::new() };
+    def.run(
+        &output.frames,
+        |d| stills.push(snapshot(d)),
+        |d| {
+            if output.animation && (d.stats.steps % every == 0 || d.t >= 1.0) {
+                anim.push(snapshot(d));
+            }
+            progress(Progress { t: d.t, steps: d.stats.steps, halved: d.stats.halved });
+        },
+    )?;
+    let quality = mesh_quality(&def.mesh);
+    if !quality.invalid_cells.is_empty() {
+        return Err(RunError::Invalid(quality.invalid_cells));
+    }
+    let norm = def.normalisation_now()?;
+    let ratios = def.jf_now()?;
+    let start_areas: Vec<f64> = (0..def.mesh.num_cells()).map(|c| cell_area_at(&def.mesh, &def.start, c)).collect();
+    let jf = jf_stats(&ratios, &start_areas);
+    let boundary_distance_max = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    files.push(("mesh.msh".into(), msh_string(&def.mesh).into_bytes()));
+    let scaled: Vec<f64> = (0..def.mesh.num_cells()).map(|c| scaled_jacobian(&def.mesh.cell_coords(c))).collect();
+    let vtu = vtu_string(&def.mesh, &[("J/f", &ratios), ("scaled_jacobian", &scaled), ("start_area", &start_areas)], &[])?;
+    files.push(("mesh.vtu".into(), vtu.into_bytes()));
+    let all_nodes = [&def.start, &def.mesh.nodes].into_iter().chain(stills.iter().chain(&anim).map(|s| &s.1));
+    let bounds = frame_bounds(all_nodes);
+    let range = symmetric_range(&ratios);
+    let draw = |nodes: &[Point2], values: &[f64], title: String, width: u32| -> Result<tiny_skia::Pixmap, RunError> {
+        let m = QuadMesh { nodes: nodes.to_vec(), ..def.mesh.clone() };
+        let opts = RenderOptions { width, bounds: Some(bounds), range: Some(range), title: Some(title), ..Default::default() };
+        Ok(render_mesh(&m, values, &opts)?)
+    };
+    let main_picture = draw(&def.mesh.nodes, &ratios, format!("{name}: J/f at t = 1"), output.width)?;
+    files.push(("mesh.png".into(), png_bytes(&main_picture)?));
+    for (t, nodes, values) in stills {
+        let picture = draw(&nodes, &values?, format!("t = {t:.2}"), output.width)?;
+        files.push((format!("frame_t{t:.2}.png"), png_bytes(&picture)?));
+    }
+    if output.animation {
+        let frames = anim
+            .into_iter()
+            .map(|(t, nodes, values)| draw(&nodes, &values?, format!("t = {t:.2}"), output.width.min(640)))
+            .collect::<Result<Vec<_>, RunError>>()?;
+        files.push(("deformation.gif".into(), gif_bytes(&frames, 8)?));
+    }
+
+    let stats = def.stats.clone();
+    let mut report = Report {
+        case: name,
+        dimension: 2,
+        cells: def.mesh.num_cells(),
+        nodes: def.mesh.num_nodes(),
+        unknowns: def.num_unknowns(),
+        integrator,
+        nominal_steps,
+        steps: stats.steps,
+        halved_steps: stats.halved,
+        solves: stats.solves,
+        invalid_cells: quality.invalid_cells.len(),
+        quality,
+        definitions: DEFINITIONS,
+        jf,
+        boundary_distance_max,
+        normalisation_c: norm.c,
+        solver: def.solver_name().to_string(),
+        time: Timings { assembly_s: stats.assembly.as_secs_f64(), analyze_s: stats.analyze.as_secs_f64(), solve_s: stats.solve.as_secs_f64(), total_s: 0.0 },
+        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once("report.json".to_string())).collect(),
+    };
+    report.time.total_s = clock.elapsed().as_secs_f64();
+    let json = serde_json::to_string_pretty(&report).expect("report serialises");
+    files.push(("report.json".into(), json.into_bytes()));
+    write_all(out_dir, &files)?;
+    Ok(report)
+}
+
+/// Area of cell c of `mesh`'s connectivity at positions `nodes`.
+fn cell_area_at(mesh: &QuadMesh, nodes: &[Point2], c: usize) -> f64 {
+    let p = mesh.cells[c].map(|n| nodes[n]);
+    0.5 * ((p[2][0] - p[0][0]) * (p[3][1] - p[1][1]) - (p[3][0] - p[1][0]) * (p[2][1] - p[0][1]))
+}
+
+/// A colour range for J/f symmetric about 1, so 1 is white.
+fn symmetric_range(values: &[f64]) -> (f64, f64) {
+    let r = Range::of(values.iter().copied());
+    let d = (1.0 - r.min).max(r.max - 1.0).max(1e-3);
+    (1.0 - d, 1.0 + d)
+}
+
+/// The box around all node sets, so frames align.
+fn frame_bounds<'a>(sets: impl Iterator<Item = &'a Vec<Point2>>) -> (Point2, Point2) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for set in sets {
+        for p in set {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+/// Creates the folder and writes every file atomically.
+fn write_all(out_dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), RunError> {
+    std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write { path: out_dir.to_path_buf(), source })?;
+    for (name, bytes) in files {
+        let path = out_dir.join(name);
+        write_atomic(&path, bytes).map_err(|source| RunError::Write { path, source })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,1058 @@
+//! Gmsh MSH 4.1 ASCII files.
+//!
+//! Writing: every boundary part becomes a curve entity carrying a dimension-1
+//! physical group of the same name; all nodes and quads live on one surface
+//! entity carrying the dimension-2 physical group `"domain"`. Element tags
+//! run from 1: boundary edge `i` gets tag `i + 1`, cell `c` gets tag
+//! `edges.len() + c + 1`. Because the reader orders elements by tag, the
+//! edge order survives even though edges are grouped by curve in the file.
+//!
+//! Reading: linear meshes only (2-node lines, 4-node quads; points are
+//! skipped). Lines are named by the physical group of their curve entity.
+//! The z coordinate is dropped.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use thiserror::Error;
+
+use super::{fmt_f64, write_atomic};
+use crate::mesh::{BoundaryEdge, Point2, QuadMesh};
+
+/// Name of the dimension-2 physical group that holds all cells.
+pub const DOMAIN_NAME: &str = "domain";
+
+/// How to turn another MSH flavour into one this reader accepts.
+const RESAVE_HINT: &str =
+    "re-save it as ASCII MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
+
+/// Errors of reading or writing MSH files. Parse errors carry the 1-based
+/// line number where the offending item starts.
+#[derive(Debug, Error)]
+pub enum MshError {
+    /// The file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file ended while more data was expected.
+    #[error("line {line}: file truncated: expected {expected}")]
+    Truncated {
+        /// Last line of the file.
+        line: usize,
+        /// What was expected next.
+        expected: String,
+    },
+    /// A token did not have the expected form.
+    #[error("line {line}: expected {expected}, found `{found}`")]
+    Syntax {
+        /// Line of the token.
+        line: usize,
+        /// What was expected.
+        expected: String,
+        /// The token found.
+        found: String,
+    },
+    /// A version other than 4.1 (e.g. MSH 2.2).
+    #[error("line {line}: MSH version {version} is not supported: {RESAVE_HINT}")]
+    UnsupportedVersion {
+        /// Line of the version number.
+        line: usize,
+        /// The version found.
+        version: String,
+    },
+    /// A binary MSH file.
+    #[error("line {line}: binary MSH not supported yet: {RESAVE_HINT}")]
+    Binary {
+        /// Line of the file-type flag.
+        line: usize,
+    },
+    /// A section header announced another number of items than it holds.
+    #[error("line {line}: {what}: the header says {expected}, the blocks hold {found}")]
+    CountMismatch {
+        /// Line of the section header.
+        line: usize,
+        /// What was counted.
+        what: &'static str,
+        /// Count from the header.
+        expected: u64,
+        /// Count found.
+        found: u64,
+    },
+    /// An element type other than 2-node line, 4-node quad or point.
+    #[error(
+        "line {line}: unsupported element type {element_type} (only linear meshes: \
+         1 = 2-node line, 3 = 4-node quad, 15 = point)"
+    )]
+    UnknownElementType {
+        /// Line of the element block header.
+        line: usize,
+        /// The MSH element type number.
+        element_type: i64,
+    },
+    /// A NaN or infinite node coordinate.
+    #[error("line {line}: node {tag} has a non-finite coordinate `{value}`")]
+    NonFinite {
+        /// Line of the coordinates.
+        line: usize,
+        /// Node tag.
+        tag: u64,
+        /// The coordinate as written.
+        value: String,
+    },
+    /// An element refers to a node tag that no node block defined.
+    #[error("line {line}: element {element} refers to unknown node tag {tag}")]
+    UnknownNode {
+        /// Line of the element.
+        line: usize,
+        /// Element tag.
+        element: u64,
+        /// The undefined node tag.
+        tag: u64,
+    },
+    /// The same node tag defined twice.
+    #[error("line {line}: node tag {tag} is defined twice")]
+    DuplicateNode {
+        /// Line of the second definition.
+        line: usize,
+        /// The node tag.
+        tag: u64,
+    },
+    /// A required section is absent.
+    #[error("missing section ${0}")]
+    MissingSection(&'static str),
+    /// The mesh to write is inconsistent.
+    #[error("cannot write mesh: {0}")]
+    InvalidMesh(String),
+}
+
+// ---------------------------------------------------------------- writing
+
+/// The mesh as MSH 4.1 ASCII text (layout in the module docs).
+///
+/// The mesh is assumed valid; [`write_msh`] checks that first. Coordinates
+/// are printed with round-trip precision, so reading gives the same bits.
+pub fn msh_string(mesh: &QuadMesh) -> String {
+    let mut out = String::new();
+    out.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+    push_physical_names(&mut out, mesh);
+    push_entities(&mut out, mesh);
+    push_nodes(&mut out, mesh);
+    push_elements(&mut out, mesh);
+    out
+}
+
+/// Checks `mesh` and writes it atomically to `path` as MSH 4.1 ASCII.
+pub fn write_msh(path: &Path, mesh: &QuadMesh) -> Result<(), MshError> {
+    validate(mesh)?;
+    write_atomic(path, msh_string(mesh).as_bytes()).map_err(|source| MshError::Io {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Rejects what would make an unreadable or lossy file: non-finite
+/// coordinates, dangling indices, and part names that cannot be quoted or
+/// that repeat (the reader identifies parts by name).
+fn validate(mesh: &QuadMesh) -> Result<(), MshError> {
+    let bad = |msg: String| Err(MshError::InvalidMesh(msg));
+    let n = mesh.nodes.len();
+    if let Some(i) = mesh
+        .nodes
+        .iter()
+        .position(|p| !p.iter().all(|x| x.is_finite()))
+    {
+        return bad(format!(
+            "node {i} has a non-finite coordinate {:?}",
+            mesh.nodes[i]
+        ));
+    }
+    if let Some(c) = mesh.cells.iter().position(|c| c.iter().any(|&v| v >= n)) {
+        return bad(format!("cell {c} refers to a node >= {n}"));
+    }
+    let k = mesh.part_names.len();
+    if let Some(e) = mesh
+        .edges
+        .iter()
+        .position(|e| e.part >= k || e.nodes.iter().any(|&v| v >= n))
+    {
+        return bad(format!(
+            "boundary edge {e} refers to a node >= {n} or a part >= {k}"
+        ));
+    }
+    for (i, name) in mesh.part_names.iter().enumerate() {
+        if name.is_empty() || name.contains(['"', '\n', '\r']) {
+            return bad(format!(
+                "part name {name:?} is empty or contains a quote or line break"
+            ));
+        }
+        if mesh.part_names[..i].contains(name) {
+            return bad(format!("part name {name:?} appears twice"));
+        }
+    }
+    Ok(())
+}
+
+/// Dimension-1 groups 1..k named after the parts, then the "domain" group.
+fn push_physical_names(out: &mut String, mesh: &QuadMesh) {
+    let k = mesh.part_names.len();
+    put!(out, "$PhysicalNames\n{}", k + 1);
+    for (i, name) in mesh.part_names.iter().enumerate() {
+        put!(out, "1 {} \"{name}\"", i + 1);
+    }
+    put!(out, "2 {} \"{DOMAIN_NAME}\"\n$EndPhysicalNames", k + 1);
+}
+
+/// Curve `i + 1` per part (physical tag `i + 1`, no bounding points) and one
+/// surface bounded by all curves (physical tag `k + 1`).
+fn push_entities(out: &mut String, mesh: &QuadMesh) {
+    let k = mesh.part_names.len();
+    put!(out, "$Entities\n0 {k} 1 0");
+    for part in 0..k {
+        let nodes = mesh
+            .edges
+            .iter()
+            .filter(|e| e.part == part)
+            .flat_map(|e| e.nodes);
+        let bbox = bounding_box(mesh, nodes);
+        put!(out, "{} {bbox} 1 {} 0", part + 1, part + 1);
+    }
+    let curves: String = (1..=k).map(|t| format!(" {t}")).collect();
+    put!(
+        out,
+        "1 {} 1 {} {k}{curves}",
+        bounding_box(mesh, 0..mesh.nodes.len()),
+        k + 1
+    );
+    out.push_str("$EndEntities\n");
+}
+
+/// `minX minY minZ maxX maxY maxZ` of the given nodes (zeros if none).
+fn bounding_box(mesh: &QuadMesh, nodes: impl Iterator<Item = usize>) -> String {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in nodes.filter_map(|n| mesh.nodes.get(n)) {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    if lo[0] > hi[0] {
+        return "0 0 0 0 0 0".to_string();
+    }
+    let f = fmt_f64;
+    format!("{} {} 0 {} {} 0", f(lo[0]), f(lo[1]), f(hi[0]), f(hi[1]))
+}
+
+/// All nodes in one non-parametric block on surface 1, tags 1..N.
+fn push_nodes(out: &mut String, mesh: &QuadMesh) {
+    let n = mesh.nodes.len();
+    let (lo, hi) = tag_range(n, 1);
+    put!(out, "$Nodes\n1 {n} {lo} {hi}\n2 1 0 {n}");
+    for tag in 1..=n {
+        put!(out, "{tag}");
+    }
+    for p in &mesh.nodes {
+        put!(out, "{} {} 0", fmt_f64(p[0]), fmt_f64(p[1]));
+    }
+    out.push_str("$EndNodes\n");
+}
+
+/// `(min, max)` of `count` consecutive tags starting at `first`; Gmsh
+/// writes `0 0` for an empty range.
+fn tag_range(count: usize, first: usize) -> (usize, usize) {
+    if count == 0 {
+        (0, 0)
+    } else {
+        (first, first + count - 1)
+    }
+}
+
+/// One line block per non-empty part, then the quad block.
+fn push_elements(out: &mut String, mesh: &QuadMesh) {
+    let k = mesh.part_names.len();
+    let per_part: Vec<Vec<usize>> = (0..k)
+        .map(|p| {
+            (0..mesh.edges.len())
+                .filter(|&e| mesh.edges[e].part == p)
+                .collect()
+        })
+        .collect();
+    let blocks =
+        per_part.iter().filter(|b| !b.is_empty()).count() + usize::from(!mesh.cells.is_empty());
+    let total = mesh.edges.len() + mesh.cells.len();
+    let (lo, hi) = tag_range(total, 1);
+    put!(out, "$Elements\n{blocks} {total} {lo} {hi}");
+    for (part, edges) in per_part.iter().enumerate().filter(|(_, b)| !b.is_empty()) {
+        put!(out, "1 {} 1 {}", part + 1, edges.len());
+        for &e in edges {
+            let [a, b] = mesh.edges[e].nodes;
+            put!(out, "{} {} {}", e + 1, a + 1, b + 1);
+        }
+    }
+    if !mesh.cells.is_empty() {
+        put!(out, "2 1 3 {}", mesh.cells.len());
+        let first = mesh.edges.len() + 1;
+        for (c, v) in mesh.cells.iter().enumerate() {
+            put!(
+                out,
+                "{} {} {} {} {}",
+                first + c,
+                v[0] + 1,
+                v[1] + 1,
+                v[2] + 1,
+                v[3] + 1
+            );
+        }
+    }
+    out.push_str("$EndElements\n");
+}
+
+// ---------------------------------------------------------------- reading
+
+/// Reads an ASCII MSH 4.1 file (see [`parse_msh`]).
+pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
+    let bytes = std::fs::read(path).map_err(|source| MshError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    // A binary file is not UTF-8; the lossy text still has a readable
+    // header, so the reader can say "binary" instead of failing obscurely.
+    parse_msh(&String::from_utf8_lossy(&bytes))
+}
+
+/// Parses ASCII MSH 4.1 text into a mesh.
+///
+/// Nodes keep file order and are renumbered from 0 (tags may have gaps);
+/// cells and boundary edges are ordered by element tag, quads keep the
+/// node order of the file. Boundary parts are the dimension-1 physical
+/// names in order of physical tag, followed by `curve<tag>` for lines on
+/// curves without a named dimension-1 group. Sections other than
+/// `$MeshFormat`, `$PhysicalNames`, `$Entities`, `$Nodes` and `$Elements`
+/// are skipped.
+pub fn parse_msh(text: &str) -> Result<QuadMesh, MshError> {
+    let mut cur = Cursor::new(text);
+    read_mesh_format(&mut cur)?;
+    let mut raw = RawMesh::default();
+    while let Some((token, line)) = cur.next_token() {
+        match token {
+            "$PhysicalNames" => read_physical_names(&mut cur, &mut raw)?,
+            "$Entities" => read_entities(&mut cur, &mut raw)?,
+            "$Nodes" => read_nodes(&mut cur, &mut raw)?,
+            "$Elements" => read_elements(&mut cur, &mut raw)?,
+            s if s.starts_with('$') && !s.starts_with("$End") => skip_section(&mut cur, &s[1..])?,
+            s => return Err(syntax(line, "a section header like `$Nodes`", s)),
+        }
+    }
+    raw.into_mesh()
+}
+
+/// What the sections say, before parts are resolved.
+#[derive(Default)]
+struct RawMesh {
+    /// `(dim, physical tag, name)` from `$PhysicalNames`.
+    physical_names: Vec<(i64, i64, String)>,
+    /// Physical tags of each curve entity.
+    curve_physicals: HashMap<i64, Vec<i64>>,
+    /// Node tag → index into `nodes`.
+    node_index: HashMap<u64, usize>,
+    nodes: Vec<Point2>,
+    /// `(element tag, curve tag, nodes)` of 2-node lines.
+    lines: Vec<(u64, i64, [usize; 2])>,
+    /// `(element tag, nodes)` of quads.
+    quads: Vec<(u64, [usize; 4])>,
+    has_nodes: bool,
+    has_elements: bool,
+}
+
+impl RawMesh {
+    /// Orders elements by tag and names the boundary parts.
+    fn into_mesh(mut self) -> Result<QuadMesh, MshError> {
+        if !self.has_nodes {
+            return Err(MshError::MissingSection("Nodes"));
+        }
+        if !self.has_elements {
+            return Err(MshError::MissingSection("Elements"));
+        }
+        self.lines.sort_by_key(|l| l.0);
+        self.quads.sort_by_key(|q| q.0);
+        let (part_names, curve_part) = self.resolve_parts();
+        let edges = self
+            .lines
+            .iter()
+            .map(|&(_, curve, nodes)| BoundaryEdge {
+                nodes,
+                part: curve_part[&curve],
+            })
+            .collect();
+        Ok(QuadMesh {
+            nodes: self.nodes,
+            cells: self.quads.into_iter().map(|q| q.1).collect(),
+            edges,
+            part_names,
+        })
+    }
+
+    /// Part names and the part of every curve that carries lines.
+    fn resolve_parts(&self) -> (Vec<String>, HashMap<i64, usize>) {
+        let mut named: Vec<&(i64, i64, String)> =
+            self.physical_names.iter().filter(|p| p.0 == 1).collect();
+        named.sort_by_key(|p| p.1);
+        let mut names: Vec<String> = Vec::new();
+        let mut tag_part: HashMap<i64, usize> = HashMap::new();
+        for (_, tag, name) in named {
+            let part = names.iter().position(|n| n == name).unwrap_or_else(|| {
+                names.push(name.clone());
+                names.len() - 1
+            });
+            tag_part.insert(*tag, part);
+        }
+        let mut curve_part = HashMap::new();
+        for &(_, curve, _) in &self.lines {
+            if curve_part.contains_key(&curve) {
+                continue;
+            }
+            let physicals = self
+                .curve_physicals
+                .get(&curve)
+                .map(Vec::as_slice)
+                .unwrap_or(&[]);
+            let part = match physicals.iter().find_map(|t| tag_part.get(t)) {
+                Some(&p) => p,
+                None => {
+                    names.push(format!("curve{curve}"));
+                    names.len() - 1
+                }
+            };
+            curve_part.insert(curve, part);
+        }
+        (names, curve_part)
+    }
+}
+
+/// `$MeshFormat`: accepts only version 4.1 ASCII.
+fn read_mesh_format(cur: &mut Cursor) -> Result<(), MshError> {
+    cur.expect("$MeshFormat")?;
+    let (version, line) = cur.token("the MSH version number")?;
+    if version != "4.1" {
+        return Err(MshError::UnsupportedVersion {
+            line,
+            version: version.to_string(),
+        });
+    }
+    let (file_type, line) = cur.token("the file type (0 = ASCII)")?;
+    match file_type {
+        "0" => {}
+        "1" => return Err(MshError::Binary { line }),
+        s => return Err(syntax(line, "file type 0 (ASCII) or 1 (binary)", s)),
+    }
+    let _data_size: u64 = cur.parse("the data size")?.0;
+    cur.expect("$EndMeshFormat")
+}
+
+/// `$PhysicalNames`: `count`, then `dim tag "name"` per group.
+fn read_physical_names(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
+    let count: u64 = cur.parse("the number of physical names")?.0;
+    for _ in 0..count {
+        let dim: i64 = cur.parse("a physical group dimension")?.0;
+        let tag: i64 = cur.parse("a physical group tag")?.0;
+        let name = cur.quoted("a quoted physical group name")?;
+        raw.physical_names.push((dim, tag, name));
+    }
+    cur.expect("$EndPhysicalNames")
+}
+
+/// `$Entities`: counts of points, curves, surfaces, volumes, then one line
+/// per entity. Only the physical tags of curves are kept.
+fn read_entities(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
+    let mut counts = [0u64; 4];
+    for (dim, c) in counts.iter_mut().enumerate() {
+        *c = cur
+            .parse(&format!("the number of dimension-{dim} entities"))?
+            .0;
+    }
+    for (dim, &count) in counts.iter().enumerate() {
+        for _ in 0..count {
+            let (tag, physicals) = read_entity(cur, dim)?;
+            if dim == 1 {
+                raw.curve_physicals.insert(tag, physicals);
+            }
+        }
+    }
+    cur.expect("$EndEntities")
+}
+
+/// One entity line: a point is `tag x y z`, a higher entity `tag` plus a
+/// bounding box; both continue with the physical tags, and higher entities
+/// end with their signed bounding entities.
+fn read_entity(cur: &mut Cursor, dim: usize) -> Result<(i64, Vec<i64>), MshError> {
+    let tag: i64 = cur.parse(&format!("a dimension-{dim} entity tag"))?.0;
+    let coords = if dim == 0 { 3 } else { 6 };
+    for _ in 0..coords {
+        cur.parse::<f64>("an entity coordinate")?;
+    }
+    let physicals = read_tag_list(cur, "physical tags")?;
+    if dim > 0 {
+        read_tag_list(cur, "bounding entity tags")?;
+    }
+    Ok((tag, physicals))
+}
+
+/// A count followed by that many integer tags.
+fn read_tag_list(cur: &mut Cursor, what: &str) -> Result<Vec<i64>, MshError> {
+    let count: u64 = cur.parse(&format!("the number of {what}"))?.0;
+    // No capacity from the file: a corrupt count must not allocate wildly.
+    let mut tags = Vec::new();
+    let expected = format!("one of {count} {what}");
+    for _ in 0..count {
+        tags.push(cur.parse(&expected)?.0);
+    }
+    Ok(tags)
+}
+
+/// `$Nodes`: header `numBlocks numNodes minTag maxTag`, then blocks.
+fn read_nodes(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
+    let header_line = cur.peek_line();
+    let blocks: u64 = cur.parse("the number of node blocks")?.0;
+    let total: u64 = cur.parse("the number of nodes")?.0;
+    cur.parse::<u64>("the minimum node tag")?;
+    cur.parse::<u64>("the maximum node tag")?;
+    let before = raw.nodes.len();
+    for _ in 0..blocks {
+        read_node_block(cur, raw)?;
+    }
+    let found = (raw.nodes.len() - before) as u64;
+    if found != total {
+        return Err(MshError::CountMismatch {
+            line: header_line,
+            what: "number of nodes",
+            expected: total,
+            found,
+        });
+    }
+    raw.has_nodes = true;
+    cur.expect("$EndNodes")
+}
+
+/// One node block: `dim tag parametric count`, the tags, then per node
+/// `x y z` followed by `dim` parametric values when `parametric` is 1.
+fn read_node_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
+    let (dim, line) = cur.parse::<u64>("a node block entity dimension")?;
+    if dim > 3 {
+        return Err(syntax(line, "an entity dimension 0..3", &dim.to_string()));
+    }
+    cur.parse::<i64>("a node block entity tag")?;
+    let (parametric, line) = cur.parse::<u64>("the parametric flag")?;
+    if parametric > 1 {
+        return Err(syntax(
+            line,
+            "parametric flag 0 or 1",
+            &parametric.to_string(),
+        ));
+    }
+    let count: u64 = cur.parse("the number of nodes in the block")?.0;
+    let mut tags = Vec::new();
+    for _ in 0..count {
+        let (tag, line) = cur.parse::<u64>("a node tag")?;
+        if raw
+            .node_index
+            .insert(tag, raw.nodes.len() + tags.len())
+            .is_some()
+        {
+            return Err(MshError::DuplicateNode { line, tag });
+        }
+        tags.push(tag);
+    }
+    let extra = if parametric == 1 { dim } else { 0 };
+    for tag in tags {
+        raw.nodes.push(read_node_coords(cur, tag, extra)?);
+    }
+    Ok(())
+}
+
+/// `x y z` of node `tag` plus `extra` parametric values; rejects NaN/inf.
+/// Expected-item messages in per-value loops are static strings: formatting
+/// one per token would dominate the time on large files.
+fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<Point2, MshError> {
+    let mut xyz = [0.0f64; 3];
+    for x in &mut xyz {
+        let (text, line) = cur.token("a node coordinate")?;
+        *x = text
+            .parse()
+            .map_err(|_| syntax(line, &format!("a coordinate of node {tag}"), text))?;
+        if !x.is_finite() {
+            return Err(MshError::NonFinite {
+                line,
+                tag,
+                value: text.to_string(),
+            });
+        }
+    }
+    for _ in 0..extra {
+        cur.parse::<f64>("a parametric node coordinate")?;
+    }
+    Ok([xyz[0], xyz[1]])
+}
+
+/// `$Elements`: header `numBlocks numElements minTag maxTag`, then blocks.
+fn read_elements(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
+    let header_line = cur.peek_line();
+    if !raw.has_nodes {
+        return Err(syntax(header_line, "$Nodes before $Elements", "$Elements"));
+    }
+    let blocks: u64 = cur.parse("the number of element blocks")?.0;
+    let total: u64 = cur.parse("the number of elements")?.0;
+    cur.parse::<u64>("the minimum element tag")?;
+    cur.parse::<u64>("the maximum element tag")?;
+    let mut found = 0;
+    for _ in 0..blocks {
+        found += read_element_block(cur, raw)?;
+    }
+    if found != total {
+        return Err(MshError::CountMismatch {
+            line: header_line,
+            what: "number of elements",
+            expected: total,
+            found,
+        });
+    }
+    raw.has_elements = true;
+    cur.expect("$EndElements")
+}
+
+/// One element block `dim entityTag type count` and its elements; returns
+/// the number of elements read.
+fn read_element_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<u64, MshError> {
+    cur.parse::<u64>("an element block entity dimension")?;
+    let entity: i64 = cur.parse("an element block entity tag")?.0;
+    let (element_type, line) = cur.parse::<i64>("an element type")?;
+    let nodes_per_element = match element_type {
+        1 => 2,
+        3 => 4,
+        15 => 1,
+        _ => return Err(MshError::UnknownElementType { line, element_type }),
+    };
+    let count: u64 = cur.parse("the number of elements in the block")?.0;
+    for _ in 0..count {
+        let (tag, line) = cur.parse::<u64>("an element tag")?;
+        let mut nodes = [0usize; 4];
+        for v in nodes.iter_mut().take(nodes_per_element) {
+            let node: u64 = cur.parse("a node tag of an element")?.0;
+            *v = *raw.node_index.get(&node).ok_or(MshError::UnknownNode {
+                line,
+                element: tag,
+                tag: node,
+            })?;
+        }
+        match element_type {
+            1 => raw.lines.push((tag, entity, [nodes[0], nodes[1]])),
+            3 => raw.quads.push((tag, nodes)),
+            _ => {} // points carry no information the mesh keeps
+        }
+    }
+    Ok(count)
+}
+
+/// Skips an unknown section up to its `$End<name>` line.
+fn skip_section(cur: &mut Cursor, name: &str) -> Result<(), MshError> {
+    let end = format!("$End{name}");
+    loop {
+        let (token, _) = cur.token(&end)?;
+        if token == end {
+            return Ok(());
+        }
+    }
+}
+
+/// A syntax error at `line`.
+fn syntax(line: usize, expected: &str, found: &str) -> MshError {
+    MshError::Syntax {
+        line,
+        expected: expected.to_string(),
+        found: found.to_string(),
+    }
+}
+
+/// Whitespace-separated tokens of the text, with line numbers.
+struct Cursor<'a> {
+    text: &'a str,
+    pos: usize,
+    /// 1-based line of `pos`.
+    line: usize,
+}
+
+impl<'a> Cursor<'a> {
+    fn new(text: &'a str) -> Self {
+        Cursor {
+            text,
+            pos: 0,
+            line: 1,
+        }
+    }
+
+    /// Moves past whitespace, counting line breaks.
+    fn skip_whitespace(&mut self) {
+        let bytes = self.text.as_bytes();
+        while let Some(&b) = bytes.get(self.pos) {
+            if !b.is_ascii_whitespace() {
+                break;
+            }
+            if b == b'\n' {
+                self.line += 1;
+            }
+            self.pos += 1;
+        }
+    }
+
+    /// Line of the next token (or of the end of the file).
+    fn peek_line(&mut self) -> usize {
+        self.skip_whitespace();
+        self.line
+    }
+
+    /// The next token and its line, or `None` at the end.
+    fn next_token(&mut self) -> Option<(&'a str, usize)> {
+        self.skip_whitespace();
+        let rest = &self.text[self.pos..];
+        if rest.is_empty() {
+            return None;
+        }
+        let len = rest
+            .find(|c: char| c.is_ascii_whitespace())
+            .unwrap_or(rest.len());
+        self.pos += len;
+        Some((&rest[..len], self.line))
+    }
+
+    /// The next token; a truncation error naming `expected` at the end.
+    fn token(&mut self, expected: &str) -> Result<(&'a str, usize), MshError> {
+        // At the end, name the last line of the file rather than the empty
+        // "line" after its final line break.
+        self.next_token().ok_or_else(|| MshError::Truncated {
+            line: self.text.lines().count().max(1),
+            expected: expected.to_string(),
+        })
+    }
+
+    /// The next token parsed as `T`, and its line.
+    fn parse<T: FromStr>(&mut self, expected: &str) -> Result<(T, usize), MshError> {
+        let (text, line) = self.token(expected)?;
+        text.parse()
+            .map(|v| (v, line))
+            .map_err(|_| syntax(line, expected, text))
+    }
+
+    /// Requires the next token to be exactly `word`.
+    fn expect(&mut self, word: &str) -> Result<(), MshError> {
+        let (text, line) = self.token(word)?;
+        if text == word {
+            Ok(())
+        } else {
+            Err(syntax(line, word, text))
+        }
+    }
+
+    /// A double-quoted string on one line (it may contain spaces).
+    fn quoted(&mut self, expected: &str) -> Result<String, MshError> {
+        self.skip_whitespace();
+        let line = self.line;
+        let rest = &self.text[self.pos..];
+        let Some(body) = rest.strip_prefix('"') else {
+            let found = rest.split_ascii_whitespace().next();
+            return Err(match found {
+                Some(found) => syntax(line, expected, found),
+                None => MshError::Truncated {
+                    line,
+                    expected: expected.to_string(),
+                },
+            });
+        };
+        let line_end = body.find('\n').unwrap_or(body.len());
+        let Some(len) = body[..line_end].find('"') else {
+            return Err(syntax(
+                line,
+                &format!("{expected} (closing quote)"),
+                rest.lines().next().unwrap_or(""),
+            ));
+        };
+        self.pos += len + 2;
+        Ok(body[..len].to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 5×4 box with interior and boundary nodes moved by a smooth
+    /// non-affine map, and coordinates that stress round-trip printing.
+    fn perturbed_box() -> QuadMesh {
+        let mut m = QuadMesh::structured_box([0.0, 0.0], [2.0, 1.0], 5, 4);
+        for p in &mut m.nodes {
+            let [x, y] = *p;
+            *p = [
+                x + 0.05 * (3.0 * y).sin() * x / 3.0,
+                y + 0.04 * (2.0 * x).cos() * y + 1e-17 * x,
+            ];
+        }
+        m.nodes[0] = [-0.0, 5e-324];
+        m
+    }
+
+    fn written(mesh: &QuadMesh) -> String {
+        msh_string(mesh)
+    }
+
+    /// The error message for `text`, which must fail to parse.
+    fn error_of(text: &str) -> String {
+        parse_msh(text)
+            .expect_err("bad input must be rejected")
+            .to_string()
+    }
+
+    #[test]
+    fn round_trip_is_identical() {
+        let m = perturbed_box();
+        let back = parse_msh(&written(&m)).unwrap();
+        assert_eq!(back, m);
+        for (a, b) in back.nodes.iter().zip(&m.nodes) {
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        }
+    }
+
+    #[test]
+    fn file_round_trip_and_layout() {
+        let m = perturbed_box();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("box.msh");
+        write_msh(&path, &m).unwrap();
+        assert_eq!(read_msh(&path).unwrap(), m);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with(
+            "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n1 1 \"left\"\n"
+        ));
+        assert!(text.contains("2 5 \"domain\"\n$EndPhysicalNames\n$Entities\n0 4 1 0\n"));
+        // 18 edges and 20 quads: 5 blocks, tags 1..38
+        assert!(text.contains("$Elements\n5 38 1 38\n1 1 1 4\n"));
+    }
+
+    #[test]
+    fn write_rejects_invalid_meshes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.msh");
+        let mut m = perturbed_box();
+        m.nodes[3][1] = f64::NAN;
+        assert!(write_msh(&path, &m)
+            .unwrap_err()
+            .to_string()
+            .contains("node 3"));
+        let mut m = perturbed_box();
+        m.edges[0].part = 9;
+        assert!(matches!(
+            write_msh(&path, &m),
+            Err(MshError::InvalidMesh(_))
+        ));
+        let mut m = perturbed_box();
+        m.part_names[1] = "left".into();
+        assert!(write_msh(&path, &m)
+            .unwrap_err()
+            .to_string()
+            .contains("twice"));
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn reads_parametric_blocks_gaps_points_and_unnamed_curves() {
+        let text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\
+            $PhysicalNames\n1\n1 7 \"wall side\"\n$EndPhysicalNames\n\
+            $Entities\n1 2 1 0\n1 0 0 0 0\n\
+            3 0 0 0 1 0 0 1 7 2 1 -1\n4 0 0 0 0 1 0 0 0\n\
+            1 0 0 0 1 1 0 0 2 3 4\n$EndEntities\n\
+            $Nodes\n3 4 2 40\n0 1 0 1\n2\n0 0 0\n\
+            1 3 1 1\n10\n1 0 0 0.5\n\
+            2 1 1 2\n20\n40\n1 1 0 0.1 0.2\n0 1 0 0.3 0.4\n$EndNodes\n\
+            $Elements\n4 5 1 9\n0 1 15 1\n9 2\n1 3 1 1\n5 2 10\n\
+            1 4 1 1\n4 40 2\n2 1 3 2\n2 2 10 20 40\n1 40 20 10 2\n$EndElements\n";
+        let m = parse_msh(text).unwrap();
+        assert_eq!(
+            m.nodes,
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+        );
+        // ordered by element tag, orientation as in the file
+        assert_eq!(m.cells, vec![[3, 2, 1, 0], [0, 1, 2, 3]]);
+        assert_eq!(
+            m.part_names,
+            vec!["wall side".to_string(), "curve4".to_string()]
+        );
+        assert_eq!(
+            m.edges,
+            vec![
+                BoundaryEdge {
+                    nodes: [3, 0],
+                    part: 1
+                },
+                BoundaryEdge {
+                    nodes: [0, 1],
+                    part: 0
+                }
+            ]
+        );
+    }
+
+    #[test]
+    fn reads_the_real_gmsh_file() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cylinder_bl_coarse.msh");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let header = |section: &str| -> Vec<usize> {
+            let at = text.find(section).unwrap() + section.len();
+            text[at..]
+                .lines()
+                .nth(1)
+                .unwrap()
+                .split_whitespace()
+                .map(|t| t.parse().unwrap())
+                .collect()
+        };
+        let m = read_msh(&path).unwrap();
+        assert_eq!(m.num_nodes(), header("$Nodes")[1]);
+        assert_eq!(m.num_cells() + m.edges.len(), header("$Elements")[1]);
+        assert_eq!(
+            m.part_names,
+            vec!["wall".to_string(), "farfield".to_string()]
+        );
+        let count = |p: usize| m.edges.iter().filter(|e| e.part == p).count();
+        assert_eq!((count(0), count(1)), (12, 56));
+        assert!(
+            (0..m.num_cells()).all(|c| m.cell_area(c) > 0.0),
+            "Gmsh quads are counter-clockwise"
+        );
+        // the square [-2,2]² minus the 12-gon inscribed in the r = 0.5 circle
+        let expected = 16.0 - 0.5 * 12.0 * 0.25 * (std::f64::consts::PI / 6.0).sin();
+        assert!((m.area() - expected).abs() < 1e-12, "area {}", m.area());
+    }
+
+    /// A valid 1×1 box file with the first occurrence of `from` replaced
+    /// by `to`, and the 1-based line where `to` starts.
+    fn corrupted(from: &str, to: &str) -> (String, usize) {
+        let text = written(&QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 1, 1));
+        let at = text
+            .find(from)
+            .unwrap_or_else(|| panic!("{from:?} not in {text}"));
+        let line = text[..at].matches('\n').count() + 1 + usize::from(from.starts_with('\n'));
+        (text.replacen(from, to, 1), line)
+    }
+
+    /// Asserts that the corrupted file fails with a message naming the line
+    /// and containing every one of `words`.
+    fn assert_rejected(from: &str, to: &str, words: &[&str]) {
+        let (text, line) = corrupted(from, to);
+        let msg = error_of(&text);
+        assert!(
+            msg.starts_with(&format!("line {line}:")),
+            "expected line {line}: {msg}"
+        );
+        for w in words {
+            assert!(msg.contains(w), "{w:?} missing from: {msg}");
+        }
+    }
+
+    #[test]
+    fn rejects_old_and_binary_formats() {
+        assert_rejected("4.1 0 8", "2.2 0 8", &["version 2.2", "-format msh41"]);
+        assert_rejected("4.1 0 8", "4 0 8", &["version 4 "]);
+        assert_rejected(
+            "4.1 0 8",
+            "4.1 1 8\n\u{1}\0\0\0",
+            &["binary MSH not supported yet"],
+        );
+        assert_eq!(error_of(""), "line 1: file truncated: expected $MeshFormat");
+    }
+
+    #[test]
+    fn rejects_truncated_files() {
+        let text = written(&QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 2, 2));
+        let cut = &text[..text.find("$EndNodes").unwrap() - 20];
+        let msg = error_of(cut);
+        let last_line = cut.lines().count();
+        assert!(
+            msg.starts_with(&format!("line {last_line}: file truncated"))
+                && msg.contains("coordinate"),
+            "{msg}"
+        );
+        // Every prefix fails cleanly, never panics.
+        for end in 0..text.len() - 1 {
+            assert!(
+                parse_msh(&text[..end]).is_err(),
+                "prefix of length {end} accepted"
+            );
+        }
+    }
+
+    #[test]
+    fn rejects_wrong_counts() {
+        // the header claims 5 nodes, the one block holds 4
+        assert_rejected(
+            "\n1 4 1 4\n",
+            "\n1 5 1 4\n",
+            &["number of nodes", "says 5", "hold 4"],
+        );
+        assert_rejected(
+            "\n5 5 1 5\n",
+            "\n5 6 1 5\n",
+            &["number of elements", "says 6", "hold 5"],
+        );
+        // a block claiming one element too many runs into the section end
+        let (text, _) = corrupted("\n2 1 3 1\n", "\n2 1 3 2\n");
+        let end_line = text.lines().position(|l| l == "$EndElements").unwrap() + 1;
+        let msg = error_of(&text);
+        assert!(
+            msg.starts_with(&format!(
+                "line {end_line}: expected an element tag, found `$EndElements`"
+            )),
+            "{msg}"
+        );
+        // a block claiming one node too few no longer adds up to the header
+        let (text, block_line) = corrupted("\n2 1 0 4\n", "\n2 1 0 3\n");
+        let msg = error_of(&text);
+        assert!(
+            msg.starts_with(&format!("line {}: number of nodes", block_line - 1)),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn rejects_unknown_element_types() {
+        assert_rejected("\n2 1 3 1\n", "\n2 1 2 1\n", &["element type 2"]);
+    }
+
+    #[test]
+    fn rejects_non_finite_coordinates() {
+        for bad in ["NaN", "inf", "-inf", "infinity"] {
+            assert_rejected(
+                "\n1 0 0\n",
+                &format!("\n1 {bad} 0\n"),
+                &["non-finite", "node 2", bad],
+            );
+        }
+    }
+
+    #[test]
+    fn rejects_unknown_node_tags_and_garbage() {
+        assert_rejected(
+            "\n5 1 2 4 3\n",
+            "\n5 1 2 44 3\n",
+            &["element 5", "unknown node tag 44"],
+        );
+        assert_rejected("\n2 1 0 4\n", "\n2 1 x 4\n", &["parametric flag", "`x`"]);
+        assert_rejected("\"left\"", "left", &["quoted", "`left`"]);
+        assert_rejected("\"left\"", "\"left", &["closing quote"]);
+        assert_rejected("$EndNodes", "$EndNode", &["expected $EndNodes"]);
+        assert_rejected("$Elements", "Elements", &["section header"]);
+    }
+}

@@ -1,0 +1,14 @@
+//! deformesh library.
+pub mod bench;
+pub mod case;
+pub mod deform;
+pub mod driver;
+pub mod expr;
+pub mod geometry;
+pub mod io;
+pub mod jacobian;
+pub mod lsfem;
+pub mod mesh;
+pub mod quality;
+pub mod render;
+pub mod solve;

@@ -1,0 +1,169 @@
+//! The `deformesh` command line: only argument handling and progress
+//! display; all work is done by the library.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use deformesh::case::{Case, DEMO_CASE};
+use deformesh::driver::{run_setup, Progress, RunError};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+#[derive(Parser)]
+#[command(name = "deformesh", version, about = "Curved, boundary-conforming quad meshes by the deformation method")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a case file (TOML) and write mesh.msh, mesh.vtu, mesh.png, report.json.
+    Run {
+        /// The case file.
+        case: PathBuf,
+        /// Output folder (default: out/<case name>).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+    },
+    /// Run the built-in case: the unit square onto a quarter disk (the seed's Figure 2).
+    Demo {
+        /// Output folder.
+        #[arg(short, long, default_value = "out/demo")]
+        out: PathBuf,
+    },
+    /// Print quality figures of a quad mesh in Gmsh MSH 4.1 format.
+    Quality {
+        /// The mesh file.
+        mesh: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Time one step (assembly + factorisation + solve) at several sizes.
+    Bench {
+        /// Cells per side.
+        #[arg(long, value_delimiter = ',', default_values_t = vec![100, 200, 400, 800])]
+        sizes: Vec<usize>,
+        /// Repetitions per size (the best is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+    },
+}
+
+fn main() {
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
+        .with_writer(std::io::stderr)
+        .init();
+    let code = match run(Cli::parse()) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            e.downcast_ref::<RunError>().map_or(1, RunError::exit_code)
+        }
+    };
+    std::process::exit(code);
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Run { case, out } => {
+            let parsed = Case::read(&case)?;
+            let base = case.parent().unwrap_or(Path::new("."));
+            let setup = parsed.setup(&case.display().to_string(), base)?;
+            let out = out.unwrap_or_else(|| Path::new("out").join(&setup.name));
+            run_and_print(setup, &out)
+        }
+        Command::Demo { out } => {
+            let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup("<built-in demo>", Path::new("."))?;
+            run_and_print(setup, &out)
+        }
+        Command::Quality { mesh, json } => {
+            let m = deformesh::io::msh::read_msh(&mesh).with_context(|| format!("reading {}", mesh.display()))?;
+            let q = deformesh::quality::mesh_quality(&m);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&q)?);
+            } else {
+                print!("{}", deformesh::quality::format_quality(&q));
+            }
+            if !q.invalid_cells.is_empty() {
+                std::process::exit(2);
+            }
+            Ok(())
+        }
+        Command::Bench { sizes, repeat } => {
+            println!("{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>13}", "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "us/unknown");
+            for n in sizes {
+                let b = deformesh::bench::one_step(n, repeat).map_err(|e| anyhow::anyhow!(e))?;
+                println!(
+                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>13.3}",
+                    format!("{n}²"),
+                    b.unknowns,
+                    b.assemble_s,
+                    b.factor_s,
+                    b.solve_s,
+                    b.step_s(),
+                    1e6 * b.step_s() / b.unknowns as f64
+                );
+            }
+            Ok(())
+        }
+    }
+}
+
+fn run_and_print(setup: deformesh::case::Setup, out: &Path) -> Result<()> {
+    let name = setup.name.clone();
+    let bar = Bar::new();
+    let report = run_setup(setup, out, |p| bar.update(p)).map_err(anyhow::Error::from)?;
+    bar.finish();
+    println!("case {name}: {} cells, {} nodes, {} steps ({} halved)", report.cells, report.nodes, report.steps, report.halved_steps);
+    print!("{}", deformesh::quality::format_quality(&report.quality));
+    println!("J/f: min {:.4}  max {:.4}  L2(J/f-1) {:.3e}", report.jf.min, report.jf.max, report.jf.l2_error);
+    println!("boundary distance max: {:.3e}", report.boundary_distance_max);
+    println!(
+        "time: assembly {:.3}s  analyse {:.3}s  factor+solve {:.3}s  total {:.3}s",
+        report.time.assembly_s, report.time.analyze_s, report.time.solve_s, report.time.total_s
+    );
+    println!("wrote {} into {}", report.outputs.join(", "), out.display());
+    Ok(())
+}
+
+/// A progress bar on a terminal, plain lines every 10% otherwise.
+struct Bar {
+    bar: Option<ProgressBar>,
+    last: std::cell::Cell<i64>,
+}
+
+impl Bar {
+    fn new() -> Bar {
+        let bar = std::io::stderr().is_terminal().then(|| {
+            let b = ProgressBar::new(1000);
+            b.set_style(ProgressStyle::with_template("{bar:40} t = {msg} [{elapsed_precise}]").expect("valid template"));
+            b
+        });
+        Bar { bar, last: std::cell::Cell::new(-1) }
+    }
+
+    fn update(&self, p: Progress) {
+        match &self.bar {
+            Some(b) => {
+                b.set_position((p.t * 1000.0) as u64);
+                b.set_message(format!("{:.3}  steps {}  halved {}", p.t, p.steps, p.halved));
+            }
+            None => {
+                let decile = (p.t * 10.0 + 1e-9).floor() as i64;
+                if decile > self.last.get() {
+                    self.last.set(decile);
+                    eprintln!("t = {:.3}  steps {}  halved {}", p.t, p.steps, p.halved);
+                }
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,201 @@
+//! Quality figures of quadrilateral meshes: validity, Jacobian
+//! determinants, scaled Jacobians and the ratio J/f of achieved to
+//! prescribed Jacobian.
+//!
+//! Definitions (reported with the numbers):
+//! - det J is the Jacobian determinant of the bilinear map from the
+//!   reference square [0,1]²; it is affine in each reference coordinate,
+//!   so its extremes over a cell are at the corners. (Gmsh's reference
+//!   square is [−1,1]², so its `minDetJac` is ours divided by 4.)
+//! - The scaled Jacobian of a cell is the minimum over its corners of
+//!   det J / (|e₁| |e₂|) with e₁, e₂ the two edges at the corner — the
+//!   sine of the corner angle (Verdict's definition). 1 for a rectangle.
+//! - J/f of a cell is |K_t| / ∫_{K₀} f(φ(ξ), t) dξ: 1 when the cell's
+//!   area is what the prescribed Jacobian asks for.
+
+use crate::jacobian::{JacobianField, Normalisation};
+use crate::lsfem::q1_map;
+use crate::mesh::{Point2, QuadMesh};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// det J of the bilinear map at the four corners (reference [0,1]²).
+pub fn corner_jacobians(p: &[Point2; 4]) -> [f64; 4] {
+    std::array::from_fn(|a| {
+        let (prev, next) = (p[(a + 3) % 4], p[(a + 1) % 4]);
+        let e1 = [next[0] - p[a][0], next[1] - p[a][1]];
+        let e2 = [prev[0] - p[a][0], prev[1] - p[a][1]];
+        e1[0] * e2[1] - e1[1] * e2[0]
+    })
+}
+
+/// Minimum over the corners of the sine of the corner angle.
+pub fn scaled_jacobian(p: &[Point2; 4]) -> f64 {
+    (0..4)
+        .map(|a| {
+            let (prev, next) = (p[(a + 3) % 4], p[(a + 1) % 4]);
+            let e1 = [next[0] - p[a][0], next[1] - p[a][1]];
+            let e2 = [prev[0] - p[a][0], prev[1] - p[a][1]];
+            let l = e1[0].hypot(e1[1]) * e2[0].hypot(e2[1]);
+            if l > 0.0 { (e1[0] * e2[1] - e1[1] * e2[0]) / l } else { 0.0 }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Cells of `mesh`'s connectivity, at positions `nodes`, whose det J is
+/// not positive at some corner (a bilinear cell is valid iff all four are).
+pub fn invalid_cells(mesh: &QuadMesh, nodes: &[Point2]) -> Vec<usize> {
+    mesh.cells
+        .par_iter()
+        .enumerate()
+        .filter(|(_, c)| corner_jacobians(&c.map(|n| nodes[n])).iter().any(|&d| !(d > 0.0)))
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// Extremes over a set of values.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct Range {
+    /// Minimum.
+    pub min: f64,
+    /// Maximum.
+    pub max: f64,
+}
+
+impl Range {
+    /// Min and max of the values (∞, −∞ when empty).
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Range {
+        values.into_iter().fold(Range { min: f64::INFINITY, max: f64::NEG_INFINITY }, |r, v| Range { min: r.min.min(v), max: r.max.max(v) })
+    }
+}
+
+/// Validity and shape figures of a quad mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshQuality {
+    /// Number of cells.
+    pub cells: usize,
+    /// Number of nodes.
+    pub nodes: usize,
+    /// det J over all corners, reference square [0,1]².
+    pub det_j: Range,
+    /// Per-cell minimum scaled Jacobian (corner-angle sine), over cells.
+    pub scaled_jacobian: Range,
+    /// Cells whose det J is not positive somewhere.
+    pub invalid_cells: Vec<usize>,
+    /// Smallest and largest cell area.
+    pub cell_area: Range,
+}
+
+/// Computes [`MeshQuality`].
+pub fn mesh_quality(mesh: &QuadMesh) -> MeshQuality {
+    let per_cell: Vec<([f64; 4], f64, f64)> = (0..mesh.num_cells())
+        .into_par_iter()
+        .map(|c| {
+            let p = mesh.cell_coords(c);
+            (corner_jacobians(&p), scaled_jacobian(&p), mesh.cell_area(c))
+        })
+        .collect();
+    MeshQuality {
+        cells: mesh.num_cells(),
+        nodes: mesh.num_nodes(),
+        det_j: Range::of(per_cell.iter().flat_map(|c| c.0)),
+        scaled_jacobian: Range::of(per_cell.iter().map(|c| c.1)),
+        invalid_cells: invalid_cells(mesh, &mesh.nodes),
+        cell_area: Range::of(per_cell.iter().map(|c| c.2)),
+    }
+}
+
+/// J/f per cell: |K_t| / ∫_{K₀} f(φ(ξ)) dξ, with φ the bilinear map from
+/// the starting cell (positions `start`) to the current one, 2×2 Gauss.
+pub fn jf_ratios(mesh: &QuadMesh, start: &[Point2], field: &JacobianField, norm: &Normalisation) -> Vec<f64> {
+    const GP: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
+    (0..mesh.num_cells())
+        .into_par_iter()
+        .map(|c| {
+            let p0 = mesh.cells[c].map(|n| start[n]);
+            let p = mesh.cell_coords(c);
+            let mut expected = 0.0;
+            for &xi in &GP {
+                for &eta in &GP {
+                    let (_, det0, _) = q1_map(&p0, xi, eta);
+                    let (x, _, _) = q1_map(&p, xi, eta);
+                    expected += 0.25 * det0 * norm.f(field, x);
+                }
+            }
+            mesh.cell_area(c) / expected
+        })
+        .collect()
+}
+
+/// Summary of J/f: extremes and the L2 norm of J/f − 1 weighted by the
+/// starting cell areas (relative to |Ω₀|).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct JfStats {
+    /// Smallest J/f.
+    pub min: f64,
+    /// Largest J/f.
+    pub max: f64,
+    /// sqrt(Σ |K₀| (J/f − 1)² / Σ |K₀|).
+    pub l2_error: f64,
+}
+
+/// Computes [`JfStats`] from per-cell ratios and starting areas.
+pub fn jf_stats(ratios: &[f64], start_areas: &[f64]) -> JfStats {
+    let r = Range::of(ratios.iter().copied());
+    let total: f64 = start_areas.iter().sum();
+    let l2 = ratios.iter().zip(start_areas).map(|(q, a)| a * (q - 1.0) * (q - 1.0)).sum::<f64>() / total;
+    JfStats { min: r.min, max: r.max, l2_error: l2.sqrt() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rectangle_and_parallelogram_figures() {
+        let rect = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]];
+        assert_eq!(corner_jacobians(&rect), [2.0; 4]);
+        assert!((scaled_jacobian(&rect) - 1.0).abs() < 1e-15);
+        // 45° parallelogram: sine of the corner angle is 1/√2
+        let par = [[0.0, 0.0], [1.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
+        assert!((scaled_jacobian(&par) - 0.5f64.sqrt()).abs() < 1e-15);
+        // a dart (non-convex) is invalid at its reflex corner
+        let dart = [[0.0, 0.0], [2.0, 0.0], [0.5, 0.5], [0.0, 2.0]];
+        assert!(corner_jacobians(&dart)[2] < 0.0);
+        let m = QuadMesh { nodes: dart.to_vec(), cells: vec![[0, 1, 2, 3]], edges: vec![], part_names: vec![] };
+        assert_eq!(mesh_quality(&m).invalid_cells, vec![0]);
+    }
+
+    #[test]
+    fn jf_is_one_for_uniform_scaling() {
+        let start = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 3);
+        let mut m = start.clone();
+        m.nodes.iter_mut().for_each(|p| *p = [1.5 * p[0], 1.5 * p[1]]);
+        let norm = Normalisation { t: 1.0, c: 2.25, c_dot: 0.0 };
+        let r = jf_ratios(&m, &start.nodes, &JacobianField::uniform(), &norm);
+        assert!(r.iter().all(|q| (q - 1.0).abs() < 1e-14));
+        let areas: Vec<f64> = (0..9).map(|c| start.cell_area(c)).collect();
+        assert!(jf_stats(&r, &areas).l2_error < 1e-14);
+    }
+}
+
+/// The figures of [`MeshQuality`] as lines a person reads.
+pub fn format_quality(q: &MeshQuality) -> String {
+    format!(
+        "cells {}  nodes {}\n\
+         det J (reference [0,1]^2): min {:.6e}  max {:.6e}\n\
+         scaled Jacobian (corner sine): min {:.4}  max {:.4}\n\
+         cell area: min {:.4e}  max {:.4e}\n\
+         invalid cells: {}{}\n",
+        q.cells,
+        q.nodes,
+        q.det_j.min,
+        q.det_j.max,
+        q.scaled_jacobian.min,
+        q.scaled_jacobian.max,
+        q.cell_area.min,
+        q.cell_area.max,
+        q.invalid_cells.len(),
+        if q.invalid_cells.is_empty() { String::new() } else { format!(" {:?}", &q.invalid_cells[..q.invalid_cells.len().min(20)]) }
+    )
+}

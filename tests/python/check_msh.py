@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Open a mesh file with the Gmsh API and print what Gmsh sees, as JSON.
+
+Usage: check_msh.py FILE
+
+Prints one JSON object:
+  num_nodes        number of nodes Gmsh loaded
+  element_types    {type number: {"name": ..., "count": ...}} over all dims
+  physical_names   {dim: [names, in order of physical tag]}
+  elements_2d      {"tags": [...], "minDetJac": [...], "maxDetJac": [...],
+                    "minSJ": [...]}, ordered by element tag
+Exits non-zero (with Gmsh's message on stderr) if Gmsh cannot read FILE.
+"""
+import json
+import sys
+
+import gmsh
+
+
+def element_types():
+    """Element counts per type over the whole model."""
+    types, tags, _ = gmsh.model.mesh.getElements()
+    out = {}
+    for t, ts in zip(types, tags):
+        name = gmsh.model.mesh.getElementProperties(t)[0]
+        out[str(int(t))] = {"name": name, "count": len(ts)}
+    return out
+
+
+def physical_names():
+    """Names of the physical groups, per dimension, by tag."""
+    out = {}
+    for dim, tag in sorted(gmsh.model.getPhysicalGroups()):
+        out.setdefault(str(dim), []).append(gmsh.model.getPhysicalName(dim, tag))
+    return out
+
+
+def elements_2d():
+    """Jacobian-based qualities of every 2D element, ordered by tag."""
+    _, tags, _ = gmsh.model.mesh.getElements(dim=2)
+    all_tags = sorted(int(t) for ts in tags for t in ts)
+    out = {"tags": all_tags}
+    for quality in ("minDetJac", "maxDetJac", "minSJ"):
+        values = gmsh.model.mesh.getElementQualities(all_tags, quality) if all_tags else []
+        out[quality] = [float(v) for v in values]
+    return out
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        # Keep stdout clean for the JSON; errors still raise exceptions.
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(sys.argv[1])
+        report = {
+            "num_nodes": len(gmsh.model.mesh.getNodes()[0]),
+            "element_types": element_types(),
+            "physical_names": physical_names(),
+            "elements_2d": elements_2d(),
+        }
+    finally:
+        gmsh.finalize()
+    json.dump(report, sys.stdout)
+    print()
+
+
+if __name__ == "__main__":
+    main()
