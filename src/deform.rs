@@ -170,7 +170,9 @@ pub struct RunStats {
     pub solves: usize,
     /// Time in assembly (including normalisation).
     pub assembly: Duration,
-    /// Time in numeric factorisation and solve.
+    /// Time in numeric factorisation.
+    pub factor: Duration,
+    /// Time in the triangular solves.
     pub solve: Duration,
     /// Time in the symbolic analysis (once).
     pub analyze: Duration,
@@ -241,7 +243,7 @@ impl Deformation {
             return Err(DeformError::InvalidStart(bad));
         }
         let (chains, roles) = classify(&mesh, &parts);
-        let boundary = Boundary { parts, chains, roles, start: mesh.nodes.clone() };
+        let boundary = Boundary { parts, chains, initial_roles: roles.clone(), roles, start: mesh.nodes.clone() };
         boundary.check_reachable()?;
         // constraint kinds are fixed for the run: build the pattern once
         let n = mesh.num_nodes();
@@ -271,6 +273,14 @@ impl Deformation {
             options,
             solver,
         })
+    }
+
+    /// Back to t = 0 (nodes, boundary parameters), keeping the analysed
+    /// pattern and the statistics: for repeated measurements.
+    pub fn reset(&mut self) {
+        self.mesh.nodes.clone_from(&self.start);
+        self.boundary.roles.clone_from(&self.boundary.initial_roles);
+        self.t = 0.0;
     }
 
     /// The boundary parts.
@@ -436,9 +446,11 @@ impl Deformation {
         self.stats.assembly += t0.elapsed();
         let t1 = Instant::now();
         self.solver.factor(&self.system.values).map_err(DeformError::from)?;
+        let t2 = Instant::now();
         self.x.copy_from_slice(&self.system.rhs);
         self.solver.solve_in_place(&mut self.x).map_err(DeformError::from)?;
-        self.stats.solve += t1.elapsed();
+        self.stats.factor += t2 - t1;
+        self.stats.solve += t2.elapsed();
         self.stats.solves += 1;
         self.system.expand(&self.x, &self.constraints, &mut self.u);
         for (i, u) in self.u.iter_mut().enumerate() {
@@ -467,6 +479,8 @@ struct Boundary {
     parts: Vec<BoundaryPart>,
     chains: Vec<Chain>,
     roles: Vec<Role>,
+    /// Roles at t = 0 (for [`Deformation::reset`]).
+    initial_roles: Vec<Role>,
     /// Node positions at t = 0.
     start: Vec<Point2>,
 }

@@ -90,10 +90,9 @@ impl QuadMesh {
         self.cells[c].map(|n| self.nodes[n])
     }
 
-    /// Area of cell `c` (exact for a bilinear quad: the shoelace formula).
+    /// Area of cell `c`.
     pub fn cell_area(&self, c: usize) -> f64 {
-        let p = self.cell_coords(c);
-        0.5 * ((p[2][0] - p[0][0]) * (p[3][1] - p[1][1]) - (p[3][0] - p[1][0]) * (p[2][1] - p[0][1]))
+        quad_area(&self.cell_coords(c))
     }
 
     /// Total area.
@@ -143,6 +142,11 @@ mod tests {
         assert_eq!(parts[0], vec![0, 2]);
         assert!(parts[6].is_empty());
     }
+}
+
+/// Area of a bilinear quad (exact: the shoelace formula on its diagonals).
+pub fn quad_area(p: &[Point2; 4]) -> f64 {
+    0.5 * ((p[2][0] - p[0][0]) * (p[3][1] - p[1][1]) - (p[3][0] - p[1][0]) * (p[2][1] - p[0][1]))
 }
 
 /// Greedy colouring of the cells so that no two cells of one colour share

@@ -252,3 +252,36 @@ fn vtk_reads_our_vtu() {
         }
     }
 }
+
+/// The whole `run` of the quarter disk (sliding, 20×20): Gmsh opens the
+/// written mesh.msh, finds every element, judges every one valid, and its
+/// extreme Jacobian determinants agree with report.json's.
+#[test]
+fn gmsh_agrees_with_the_report_of_a_run() {
+    use deformesh::case::{Case, DEMO_CASE};
+    let dir = tempfile::tempdir().unwrap();
+    let setup = Case::parse(DEMO_CASE, "demo")
+        .unwrap()
+        .setup("demo", Path::new("."))
+        .unwrap();
+    let out = dir.path().join("out");
+    let report = deformesh::driver::run_setup(setup, &out, |_| {}).unwrap();
+    let gmsh = run_checker("check_msh.py", &out.join("mesh.msh"));
+    let types = gmsh["element_types"].as_object().unwrap();
+    assert_eq!(types["3"]["count"], 400);
+    assert_eq!(types["1"]["count"], 80);
+    assert_eq!(gmsh["num_nodes"], 441);
+    assert_eq!(gmsh["physical_names"]["1"], serde_json::json!(["axes", "arc"]));
+    let q = &gmsh["elements_2d"];
+    let (min_dj, max_dj, min_sj) = (floats(&q["minDetJac"]), floats(&q["maxDetJac"]), floats(&q["minSJ"]));
+    assert!(min_dj.iter().chain(&min_sj).all(|&v| v > 0.0), "Gmsh finds an invalid element");
+    let gmsh_min = min_dj.iter().copied().fold(f64::INFINITY, f64::min);
+    let gmsh_max = max_dj.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(report.invalid_cells, 0);
+    assert!(close(gmsh_min, report.quality.det_j.min / 4.0), "minDetJac {gmsh_min} vs ours/4 {}", report.quality.det_j.min / 4.0);
+    assert!(close(gmsh_max, report.quality.det_j.max / 4.0), "maxDetJac {gmsh_max} vs ours/4 {}", report.quality.det_j.max / 4.0);
+    // and the VTU of the same run opens in VTK with the J/f array
+    let vtk = run_checker("check_vtu.py", &out.join("mesh.vtu"));
+    assert_eq!(vtk["num_cells"], 400);
+    assert_eq!(vtk["cell_arrays"]["J/f"], 1);
+}
