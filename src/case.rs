@@ -269,6 +269,7 @@ impl Case {
         }
         mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
         let field = self.field(file, base_dir)?;
+        check_positive(&field, &mesh).map_err(|e| err(format!("field `jacobian`: {e}")))?;
         let mut frames = self.output.frames.clone();
         frames.sort_by(f64::total_cmp);
         frames.dedup();
@@ -340,6 +341,21 @@ impl Case {
             }
         })
     }
+}
+
+/// g must be positive on the starting domain at every pseudo-time; where
+/// the domain moves to is checked during the run.
+fn check_positive(field: &JacobianField, mesh: &QuadMesh) -> Result<(), crate::jacobian::JacobianError> {
+    let centres = (0..mesh.num_cells()).map(|c| {
+        let p = mesh.cell_coords(c);
+        [0.25 * (p[0][0] + p[1][0] + p[2][0] + p[3][0]), 0.25 * (p[0][1] + p[1][1] + p[2][1] + p[3][1])]
+    });
+    for x in mesh.nodes.iter().copied().chain(centres) {
+        for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
+            field.g_checked(x, t)?;
+        }
+    }
+    Ok(())
 }
 
 /// Translates one part's spec into its kind, checking the fields that

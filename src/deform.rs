@@ -103,7 +103,7 @@ pub enum DeformError {
     #[error(transparent)]
     Jacobian(#[from] JacobianError),
     /// The linear solver failed.
-    #[error("linear solver: {0}")]
+    #[error("the linear solver failed")]
     Solve(#[from] SolveError),
     /// The assembly failed for a reason other than an inverted cell.
     #[error(transparent)]
@@ -218,8 +218,9 @@ pub struct Deformation {
     bvel: Vec<Point2>,
     u: Vec<Point2>,
     k1: Vec<Point2>,
-    k2: Vec<Point2>,
     stage: Vec<Point2>,
+    next: Vec<Point2>,
+    saved_roles: Vec<Role>,
     x: Vec<f64>,
 }
 
@@ -265,8 +266,9 @@ impl Deformation {
             bvel: vec![[0.0; 2]; n],
             u: vec![[0.0; 2]; n],
             k1: vec![[0.0; 2]; n],
-            k2: vec![[0.0; 2]; n],
             stage: mesh.nodes.clone(),
+            next: mesh.nodes.clone(),
+            saved_roles: boundary.roles.clone(),
             mesh,
             boundary,
             field,
@@ -376,57 +378,50 @@ impl Deformation {
     /// Tries a step; on success updates the state and returns None, else
     /// leaves the state untouched and returns the cells that would invert.
     fn try_step(&mut self, h: f64) -> Result<Option<Vec<usize>>, DeformError> {
-        let t = self.t;
-        let roles_before = self.boundary.roles.clone();
+        self.saved_roles.clone_from(&self.boundary.roles);
         let nodes = std::mem::take(&mut self.mesh.nodes);
-        let result = self.advance(&nodes, t, h);
-        match result {
-            Ok(new_nodes) => {
-                let bad = invalid_cells(&self.mesh, &new_nodes);
+        let result = self.advance(&nodes, self.t, h);
+        self.mesh.nodes = nodes;
+        let failure = match result {
+            Ok(()) => {
+                let bad = invalid_cells(&self.mesh, &self.next);
                 if bad.is_empty() {
-                    self.mesh.nodes = new_nodes;
-                    self.t = t + h;
-                    Ok(None)
-                } else {
-                    self.mesh.nodes = nodes;
-                    self.boundary.roles = roles_before;
-                    Ok(Some(bad))
+                    std::mem::swap(&mut self.mesh.nodes, &mut self.next);
+                    self.t += h;
+                    return Ok(None);
                 }
+                Ok(Some(bad))
             }
-            Err(StepFailure::Inverted(cell)) => {
-                self.mesh.nodes = nodes;
-                self.boundary.roles = roles_before;
-                Ok(Some(vec![cell]))
-            }
-            Err(StepFailure::Fatal(e)) => {
-                self.mesh.nodes = nodes;
-                self.boundary.roles = roles_before;
-                Err(e)
-            }
-        }
+            Err(StepFailure::Inverted(cell)) => Ok(Some(vec![cell])),
+            Err(StepFailure::Fatal(e)) => Err(e),
+        };
+        // the boundary parameters moved with the rejected step: restore them
+        std::mem::swap(&mut self.boundary.roles, &mut self.saved_roles);
+        failure
     }
 
-    /// New node positions after one step of the integrator from `nodes`.
-    fn advance(&mut self, nodes: &[Point2], t: f64, h: f64) -> Result<Vec<Point2>, StepFailure> {
+    /// Writes into `self.next` the positions after one step of the
+    /// integrator from `nodes` at time t.
+    fn advance(&mut self, nodes: &[Point2], t: f64, h: f64) -> Result<(), StepFailure> {
         self.node_velocity(nodes, t)?;
-        let mut k1 = std::mem::take(&mut self.k1);
-        k1.copy_from_slice(&self.u);
-        let mut out: Vec<Point2> = nodes.iter().zip(&k1).map(|(x, k)| [x[0] + h * k[0], x[1] + h * k[1]]).collect();
+        self.k1.copy_from_slice(&self.u);
+        for ((o, x), k) in self.next.iter_mut().zip(nodes).zip(&self.k1) {
+            *o = [x[0] + h * k[0], x[1] + h * k[1]];
+        }
         if self.options.integrator == Integrator::Heun {
-            self.boundary.put_back(&mut out, t + h);
+            // the stage mesh conforms to Γ_{t+h} too
+            self.boundary.put_back(&mut self.next, t + h);
             let mut stage = std::mem::take(&mut self.stage);
-            stage.copy_from_slice(&out);
+            stage.copy_from_slice(&self.next);
             let r = self.node_velocity(&stage, t + h);
             self.stage = stage;
             r?;
-            self.k2.copy_from_slice(&self.u);
-            for ((o, x), (a, b)) in out.iter_mut().zip(nodes).zip(k1.iter().zip(&self.k2)) {
+            for ((o, x), (a, b)) in self.next.iter_mut().zip(nodes).zip(self.k1.iter().zip(&self.u)) {
                 *o = [x[0] + 0.5 * h * (a[0] + b[0]), x[1] + 0.5 * h * (a[1] + b[1])];
             }
         }
-        self.k1 = k1;
-        self.boundary.put_back(&mut out, t + h);
-        Ok(out)
+        self.boundary.put_back(&mut self.next, t + h);
+        Ok(())
     }
 
     /// Solves the LSFEM system at positions `nodes`, time t, and stores the
@@ -515,25 +510,58 @@ impl Boundary {
         }
     }
 
+    /// Every point of a moving chain must have an image on the target,
+    /// and the images must run along the target without folding back or
+    /// jumping (a closest-point map does both behind a centre of
+    /// curvature) — else the boundary itself would tangle.
     fn check_reachable(&self) -> Result<(), DeformError> {
-        for (k, c) in self.chains.iter().enumerate() {
+        const PER_EDGE: usize = 8;
+        for c in &self.chains {
             let part = &self.parts[c.part];
-            if let PartKind::Move { correspondence, .. } = part.kind {
-                // every vertex, and midpoints, must have an image
-                let samples = c.s.iter().copied().chain(c.s.windows(2).map(|w| 0.5 * (w[0] + w[1])));
-                for s in samples {
-                    if self.chain_velocity(k, s).is_none() {
-                        let p = c.start(s);
-                        let why = match correspondence {
-                            Correspondence::Radial { centre } => format!(
-                                "the ray from the centre ({}, {}) through the boundary point ({:.6}, {:.6}) misses the target shape",
-                                centre[0], centre[1], p[0], p[1]
-                            ),
-                            Correspondence::Normal => format!("no closest point on the target for ({:.6}, {:.6})", p[0], p[1]),
-                        };
-                        return Err(DeformError::Unreachable { part: part.name.clone(), why });
-                    }
+            let PartKind::Move { correspondence, .. } = part.kind else { continue };
+            let fail = |why: String| DeformError::Unreachable { part: part.name.clone(), why };
+            let samples: Vec<f64> = c
+                .s
+                .windows(2)
+                .flat_map(|w| (0..PER_EDGE).map(move |j| w[0] + (w[1] - w[0]) * j as f64 / PER_EDGE as f64))
+                .chain(std::iter::once(1.0))
+                .collect();
+            let mut images = Vec::with_capacity(samples.len());
+            for &s in &samples {
+                let p = c.start(s);
+                let Some(x) = self.image(c.part, p) else {
+                    return Err(fail(match correspondence {
+                        Correspondence::Radial { centre } => format!(
+                            "the ray from the centre ({}, {}) through the boundary point ({:.6}, {:.6}) misses the target shape",
+                            centre[0], centre[1], p[0], p[1]
+                        ),
+                        Correspondence::Normal => format!("no closest point on the target for ({:.6}, {:.6})", p[0], p[1]),
+                    }));
+                };
+                images.push(x);
+            }
+            let steps: Vec<Point2> = images.windows(2).map(|w| [w[1][0] - w[0][0], w[1][1] - w[0][1]]).collect();
+            let mut lengths: Vec<f64> = steps.iter().map(|d| d[0].hypot(d[1])).collect();
+            for (j, w) in steps.windows(2).enumerate() {
+                if w[0][0] * w[1][0] + w[0][1] * w[1][1] < 0.0 {
+                    let p = c.start(samples[j + 1]);
+                    return Err(fail(format!(
+                        "the {} correspondence folds back near the boundary point ({:.6}, {:.6}): its images on the target reverse direction (try correspondence = \"radial\" with a centre)",
+                        if matches!(correspondence, Correspondence::Normal) { "closest-point" } else { "radial" },
+                        p[0],
+                        p[1]
+                    )));
                 }
+            }
+            let total: f64 = lengths.iter().sum();
+            lengths.sort_by(f64::total_cmp);
+            let median = lengths[lengths.len() / 2];
+            if let Some(j) = steps.iter().position(|d| d[0].hypot(d[1]) > 50.0 * median.max(1e-3 * total / steps.len() as f64)) {
+                let p = c.start(samples[j]);
+                return Err(fail(format!(
+                    "the correspondence jumps near the boundary point ({:.6}, {:.6}): neighbouring points land far apart on the target (try correspondence = \"radial\" with a centre)",
+                    p[0], p[1]
+                )));
             }
         }
         Ok(())

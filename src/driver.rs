@@ -30,16 +30,16 @@ pub enum RunError {
     #[error("the deformed mesh has {} invalid cell(s): {:?}", .0.len(), &.0[..(.0.len().min(20))])]
     Invalid(Vec<usize>),
     /// A picture failed.
-    #[error("picture: {0}")]
+    #[error("drawing the picture failed")]
     Render(#[from] RenderError),
     /// A writer failed.
-    #[error("{0}")]
+    #[error(transparent)]
     Msh(#[from] MshError),
     /// A writer failed.
-    #[error("{0}")]
+    #[error(transparent)]
     Vtu(#[from] VtuError),
     /// The output folder could not be written.
-    #[error("cannot write `{path}`: {source}")]
+    #[error("cannot write `{}`", path.display())]
     Write {
         /// The path.
         path: PathBuf,

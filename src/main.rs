@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use deformesh::case::{Case, DEMO_CASE};
 use deformesh::driver::{run_setup, Progress, RunError};
+use deformesh::io::msh::MshError;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -73,14 +74,18 @@ fn run(cli: Cli) -> Result<()> {
             let base = case.parent().unwrap_or(Path::new("."));
             let setup = parsed.setup(&case.display().to_string(), base)?;
             let out = out.unwrap_or_else(|| Path::new("out").join(&setup.name));
-            run_and_print(setup, &out)
+            run_and_print(setup, &out).with_context(|| case.display().to_string())
         }
         Command::Demo { out } => {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup("<built-in demo>", Path::new("."))?;
-            run_and_print(setup, &out)
+            run_and_print(setup, &out).context("<built-in demo>")
         }
         Command::Quality { mesh, json } => {
-            let m = deformesh::io::msh::read_msh(&mesh).with_context(|| format!("reading {}", mesh.display()))?;
+            // an I/O error names the file itself; a parse error gives a line
+            let m = deformesh::io::msh::read_msh(&mesh).map_err(|e| match e {
+                MshError::Io { .. } => anyhow::Error::from(e),
+                other => anyhow::Error::from(other).context(mesh.display().to_string()),
+            })?;
             let q = deformesh::quality::mesh_quality(&m);
             if json {
                 println!("{}", serde_json::to_string_pretty(&q)?);

@@ -137,3 +137,73 @@ fn expression_field_is_normalised_on_the_moving_domain() {
     let q = mesh_quality(&d.mesh);
     assert!(q.invalid_cells.is_empty());
 }
+
+/// Runs a case text to t = 1 and checks validity and that every node of
+/// every moving part lies on its target within 1e-10; returns J/f range.
+fn run_on_target(text: &str) -> (f64, f64) {
+    let s = Case::parse(text, "shape").unwrap().setup("shape", Path::new(".")).unwrap();
+    let mut d = Deformation::new(s.mesh, s.parts, s.field, s.options).unwrap();
+    d.run(&[], |_| {}, |_| {}).unwrap();
+    let q = mesh_quality(&d.mesh);
+    assert!(q.invalid_cells.is_empty(), "invalid cells {:?}", q.invalid_cells);
+    let dists = d.boundary_distances();
+    assert!(!dists.is_empty());
+    for (i, dist) in dists {
+        assert!(dist < 1e-10, "node {i} at {:?} is {dist:e} off its target", d.mesh.nodes[i]);
+    }
+    let jf = d.jf_now().unwrap();
+    let r = jf_stats(&jf, &vec![1.0; jf.len()]);
+    (r.min, r.max)
+}
+
+fn whole_box_onto(shape: &str, correspondence: &str) -> String {
+    format!(
+        "[mesh]\nlower = [-1.0, -1.0]\nupper = [1.0, 1.0]\ncells = [16, 16]\n\
+         [[boundary]]\nname = \"outer\"\nsides = [\"left\", \"right\", \"bottom\", \"top\"]\nkind = \"move\"\n\
+         shape = {shape}\n{correspondence}\n[time]\nsteps = 30\n"
+    )
+}
+
+#[test]
+fn every_target_shape_is_reached_exactly() {
+    let radial = "correspondence = \"radial\"\ncentre = [0.0, 0.0]";
+    let cases = [
+        ("ellipse", whole_box_onto("{ type = \"ellipse\", centre = [0.0, 0.0], semi_axes = [1.6, 0.9], angle = 20.0 }", radial)),
+        ("ellipse, closest point", whole_box_onto("{ type = \"ellipse\", centre = [0.0, 0.0], semi_axes = [1.5, 1.3] }", "correspondence = \"normal\"")),
+        ("superellipse", whole_box_onto("{ type = \"superellipse\", centre = [0.0, 0.0], semi_axes = [1.3, 1.1], exponent = 3.0 }", radial)),
+        ("circle", whole_box_onto("{ type = \"circle\", centre = [0.1, 0.0], radius = 1.2 }", radial)),
+        (
+            "closed spline",
+            whole_box_onto(
+                "{ type = \"spline\", closed = true, points = [[1.4, 0.0], [0.9, 0.9], [0.0, 1.2], [-1.0, 0.8], [-1.3, 0.0], [-0.8, -0.9], [0.0, -1.1], [1.0, -0.8]] }",
+                radial,
+            ),
+        ),
+    ];
+    for (name, text) in cases {
+        let (lo, hi) = run_on_target(&text);
+        eprintln!("{name}: J/f in [{lo:.3}, {hi:.3}]");
+        assert!(lo > 0.5 && hi < 2.0, "{name}: J/f in [{lo}, {hi}]");
+    }
+    // an open curve and a line: the top of the unit square onto a wave
+    // through given points, and the right side onto a slanted line
+    let text = "[mesh]\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\ncells = [16, 16]\n\
+        [[boundary]]\nname = \"wave\"\nsides = [\"top\"]\nkind = \"move\"\n\
+        shape = { type = \"spline\", points = [[-0.2, 1.0], [0.25, 1.15], [0.5, 1.0], [0.75, 0.85], [1.2, 1.0]] }\n\
+        correspondence = \"normal\"\n\
+        [[boundary]]\nname = \"slant\"\nsides = [\"right\"]\nkind = \"move\"\n\
+        shape = { type = \"line\", from = [1.0, 0.0], to = [1.2, 1.0] }\ncorrespondence = \"normal\"\n";
+    let (lo, hi) = run_on_target(text);
+    assert!(lo > 0.5 && hi < 2.0, "wave: J/f in [{lo}, {hi}]");
+}
+
+#[test]
+fn a_folding_correspondence_is_an_error_naming_the_part() {
+    // (±1, 0) lie inside the evolute of this ellipse: their closest points
+    // jump between the upper and lower halves
+    let text = whole_box_onto("{ type = \"ellipse\", centre = [0.0, 0.0], semi_axes = [1.6, 0.9] }", "correspondence = \"normal\"");
+    let s = Case::parse(&text, "fold").unwrap().setup("fold", Path::new(".")).unwrap();
+    let err = Deformation::new(s.mesh, s.parts, s.field, s.options).err().expect("an error");
+    let msg = err.to_string();
+    assert!(msg.contains("`outer`") && (msg.contains("jumps") || msg.contains("folds")), "{msg}");
+}

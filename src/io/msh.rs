@@ -33,7 +33,7 @@ const RESAVE_HINT: &str =
 #[derive(Debug, Error)]
 pub enum MshError {
     /// The file could not be read or written.
-    #[error("{}: {source}", path.display())]
+    #[error("cannot read or write `{}`", path.display())]
     Io {
         /// The file concerned.
         path: PathBuf,

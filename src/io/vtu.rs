@@ -16,7 +16,7 @@ pub const VTK_QUAD: u8 = 9;
 #[derive(Debug, Error)]
 pub enum VtuError {
     /// The file could not be written.
-    #[error("{}: {source}", path.display())]
+    #[error("cannot write `{}`", path.display())]
     Io {
         /// The file concerned.
         path: PathBuf,

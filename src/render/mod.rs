@@ -110,10 +110,10 @@ pub enum RenderError {
     #[error("PNG encoding failed: {0}")]
     Png(String),
     /// GIF encoding failed.
-    #[error("GIF encoding failed: {0}")]
+    #[error("GIF encoding failed")]
     Gif(#[from] gif::EncodingError),
     /// Writing a file failed.
-    #[error("writing the image failed: {0}")]
+    #[error("writing the image failed")]
     Io(#[from] std::io::Error),
 }
 

@@ -1,0 +1,295 @@
+//! End-to-end tests of the `deformesh` command line: the real binary is run
+//! on case files written into a temporary folder.
+//!
+//! Every bad input must fail with exit code 1 (2 is kept for tangled or
+//! invalid meshes), say on stderr which field, part, file or line is wrong,
+//! and leave nothing behind: no output folder, no stray files.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use tempfile::TempDir;
+
+/// The file name every case is written under.
+const CASE: &str = "case.toml";
+
+/// A small valid case: the unit square onto the quarter disk of radius 1.25,
+/// 6×6 cells, 10 steps, no frames. Bad cases are edits of it.
+const SMALL: &str = r#"name = "small"
+
+[mesh]
+lower = [0.0, 0.0]
+upper = [1.0, 1.0]
+cells = [6, 6]
+
+[[boundary]]
+name = "axes"
+sides = ["left", "bottom"]
+kind = "slip"
+
+[[boundary]]
+name = "arc"
+sides = ["right", "top"]
+kind = "move"
+shape = { type = "circle", centre = [0.0, 0.0], radius = 1.25 }
+correspondence = "radial"
+centre = [0.0, 0.0]
+
+[time]
+steps = 10
+"#;
+
+/// What a run of the binary gave.
+struct Ran {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `deformesh ARGS` inside `dir` (so a default `out/` would land there).
+fn deformesh(dir: &Path, args: &[&str]) -> Ran {
+    let out = Command::new(env!("CARGO_BIN_EXE_deformesh"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("cannot start deformesh");
+    Ran {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// `text` with `from` replaced by `to`; `from` must occur.
+fn edit(text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "`{from}` is not in the case");
+    text.replacen(from, to, 1)
+}
+
+/// `"line N"` for the first line of `text` containing `needle`.
+fn line_of(text: &str, needle: &str) -> String {
+    let n = text.lines().position(|l| l.contains(needle)).expect("needle in text") + 1;
+    format!("line {n}")
+}
+
+/// Writes `text` as the case file of `dir`.
+fn write_case(dir: &Path, text: &str) -> PathBuf {
+    let path = dir.join(CASE);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Sorted names of everything in `dir`, hidden files included.
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().expect("temp paths are UTF-8")
+}
+
+/// A clean failure: exit code 1, no panic, every `needle` on stderr, and
+/// `dir` holding exactly `inputs` (so no output folder and no temp files).
+fn assert_clean_failure(ran: &Ran, dir: &Path, needles: &[&str], inputs: &[&str]) {
+    let err = &ran.stderr;
+    assert_eq!(ran.code, Some(1), "exit code; stderr:\n{err}");
+    assert!(!err.contains("panicked"), "panic:\n{err}");
+    for needle in needles {
+        assert!(err.contains(needle), "stderr lacks `{needle}`:\n{err}");
+    }
+    let mut expected: Vec<String> = inputs.iter().map(|s| s.to_string()).collect();
+    expected.sort();
+    assert_eq!(files_in(dir), expected, "files left behind; stderr:\n{err}");
+}
+
+/// Writes `extra` files and the case into a fresh folder, runs
+/// `deformesh run case.toml -o out` and checks it fails cleanly, naming
+/// the case file and every `needle`.
+fn run_bad_case_with(text: &str, extra: &[(&str, &[u8])], needles: &[&str]) {
+    let dir = TempDir::new().unwrap();
+    for (name, bytes) in extra {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    let case = write_case(dir.path(), text);
+    let out = dir.path().join("out");
+    let ran = deformesh(dir.path(), &["run", path_str(&case), "-o", path_str(&out)]);
+    let inputs: Vec<&str> = extra.iter().map(|e| e.0).chain([CASE]).collect();
+    assert_clean_failure(&ran, dir.path(), needles, &inputs);
+    assert!(!out.exists());
+}
+
+fn run_bad_case(text: &str, needles: &[&str]) {
+    run_bad_case_with(text, &[], needles);
+}
+
+/// SMALL with a `[jacobian]` table appended.
+fn with_jacobian(table: &str) -> String {
+    format!("{SMALL}\n[jacobian]\n{table}")
+}
+
+/// The number after `min` on the line of `text` starting with `label`.
+fn min_on_line(text: &str, label: &str) -> f64 {
+    let line = text.lines().find(|l| l.starts_with(label)).unwrap_or_else(|| panic!("no `{label}` line in:\n{text}"));
+    let after = line.split("min").nth(1).expect("`min` on the line");
+    after.split_whitespace().next().unwrap().parse().unwrap_or_else(|e| panic!("bad number in `{line}`: {e}"))
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).expect("valid JSON")
+}
+
+// ------------------------------------------------------------ bad cases
+
+#[test]
+fn unknown_field_in_shape() {
+    let text = edit(SMALL, "radius = 1.25", "radiuss = 1.25");
+    run_bad_case(&text, &[CASE, &line_of(&text, "radiuss"), "unknown field `radiuss`", "`radius`"]);
+}
+
+#[test]
+fn unknown_top_level_key() {
+    let text = edit(SMALL, "name = \"small\"\n", "name = \"small\"\ncolour = \"red\"\n");
+    run_bad_case(&text, &[CASE, &line_of(&text, "colour"), "unknown field `colour`"]);
+}
+
+#[test]
+fn wrong_type() {
+    let text = edit(SMALL, "cells = [6, 6]", "cells = \"20\"");
+    run_bad_case(&text, &[CASE, &line_of(&text, "cells"), "cells = \"20\"", "invalid type: string \"20\""]);
+}
+
+#[test]
+fn move_part_without_shape() {
+    let text = edit(SMALL, "shape = { type = \"circle\", centre = [0.0, 0.0], radius = 1.25 }\n", "");
+    run_bad_case(&text, &[CASE, "boundary[1] (`arc`)", "needs a `shape`"]);
+}
+
+#[test]
+fn side_named_twice() {
+    let text = edit(SMALL, r#"sides = ["right", "top"]"#, r#"sides = ["right", "left"]"#);
+    run_bad_case(&text, &[CASE, "`arc`", "side `left` is named twice", "`axes`"]);
+}
+
+#[test]
+fn unknown_side() {
+    let text = edit(SMALL, r#""top""#, r#""tpo""#);
+    run_bad_case(&text, &[CASE, "boundary[1] (`arc`)", "unknown side `tpo`"]);
+}
+
+#[test]
+fn non_positive_jacobian() {
+    let text = with_jacobian("type = \"expression\"\nf = \"x - 0.5\"\n");
+    run_bad_case(&text, &["not positive", "at (x, y) = ("]);
+}
+
+#[test]
+fn expression_syntax_error() {
+    let text = with_jacobian("type = \"expression\"\nf = \"1 + * x\"\n");
+    run_bad_case(&text, &[CASE, "field `jacobian.f`", "column 5"]);
+}
+
+#[test]
+fn image_file_missing() {
+    let text = with_jacobian("type = \"image\"\nfile = \"missing.png\"\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\n");
+    run_bad_case(&text, &[CASE, "field `jacobian.file`", "missing.png"]);
+}
+
+#[test]
+fn image_file_not_png() {
+    let text = with_jacobian("type = \"image\"\nfile = \"garbage.png\"\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\n");
+    let garbage: Vec<u8> = (0..300u32).map(|i| (i * 37 % 251) as u8).collect();
+    run_bad_case_with(&text, &[("garbage.png", &garbage)], &[CASE, "field `jacobian.file`", "garbage.png"]);
+}
+
+#[test]
+fn radial_rays_miss_the_target() {
+    let text = edit(SMALL, "centre = [0.0, 0.0], radius = 1.25", "centre = [-10.0, -10.0], radius = 1.0");
+    run_bad_case(&text, &["boundary part `arc`", "misses the target"]);
+}
+
+#[test]
+fn case_file_does_not_exist() {
+    let dir = TempDir::new().unwrap();
+    let case = dir.path().join("does_not_exist.toml");
+    let out = dir.path().join("out");
+    let ran = deformesh(dir.path(), &["run", path_str(&case), "-o", path_str(&out)]);
+    assert_clean_failure(&ran, dir.path(), &["does_not_exist.toml", "cannot read"], &[]);
+}
+
+#[test]
+fn quality_of_missing_file() {
+    let dir = TempDir::new().unwrap();
+    let mesh = dir.path().join("missing.msh");
+    let ran = deformesh(dir.path(), &["quality", path_str(&mesh)]);
+    assert_clean_failure(&ran, dir.path(), &["missing.msh"], &[]);
+    assert!(ran.stdout.is_empty(), "{}", ran.stdout);
+}
+
+#[test]
+fn quality_of_truncated_msh() {
+    let dir = TempDir::new().unwrap();
+    let full = deformesh::io::msh::msh_string(&deformesh::mesh::QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 2, 2));
+    let cut = &full[..full.find("$EndNodes").unwrap() - 20];
+    std::fs::write(dir.path().join("cut.msh"), cut).unwrap();
+    let ran = deformesh(dir.path(), &["quality", path_str(&dir.path().join("cut.msh"))]);
+    let line = format!("line {}: file truncated", cut.lines().count());
+    assert_clean_failure(&ran, dir.path(), &["cut.msh", &line], &["cut.msh"]);
+}
+
+/// The same message must not be printed twice (an error whose Display
+/// already shows its source, and which also reports it as `source()`).
+#[test]
+fn quality_of_missing_file_says_it_once() {
+    let dir = TempDir::new().unwrap();
+    let ran = deformesh(dir.path(), &["quality", "missing.msh"]);
+    let cause = ran.stderr.trim().rsplit(": ").next().unwrap().to_string();
+    assert_eq!(ran.stderr.matches(cause.as_str()).count(), 1, "repeated cause:\n{}", ran.stderr);
+}
+
+// ------------------------------------------------------------ good runs
+
+#[test]
+fn small_case_runs_and_quality_agrees() {
+    let dir = TempDir::new().unwrap();
+    let case = write_case(dir.path(), SMALL);
+    let out = dir.path().join("out");
+    let ran = deformesh(dir.path(), &["run", path_str(&case), "-o", path_str(&out)]);
+    assert_eq!(ran.code, Some(0), "stderr:\n{}", ran.stderr);
+    assert_eq!(files_in(dir.path()), [CASE, "out"]);
+    assert_eq!(files_in(&out), ["mesh.msh", "mesh.png", "mesh.vtu", "report.json"]);
+    assert!(std::fs::read(out.join("mesh.png")).unwrap().starts_with(b"\x89PNG\r\n\x1a\n"));
+
+    let report = read_json(&out.join("report.json"));
+    assert_eq!(report["invalid_cells"], 0, "{report:#}");
+    assert_eq!(report["cells"], 36);
+    let det_min = report["quality"]["det_j"]["min"].as_f64().expect("quality.det_j.min");
+    assert!(det_min > 0.0);
+    assert!((min_on_line(&ran.stdout, "det J") - det_min).abs() <= 1e-6 * det_min, "run printed:\n{}", ran.stdout);
+
+    let q = deformesh(dir.path(), &["quality", path_str(&out.join("mesh.msh"))]);
+    assert_eq!(q.code, Some(0), "stderr:\n{}", q.stderr);
+    let printed = min_on_line(&q.stdout, "det J");
+    assert!((printed - det_min).abs() <= 1e-6 * det_min, "quality says {printed}, report.json {det_min}:\n{}", q.stdout);
+}
+
+#[test]
+fn demo_writes_frames_and_animation() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("demo");
+    let ran = deformesh(dir.path(), &["demo", "-o", path_str(&out)]);
+    assert_eq!(ran.code, Some(0), "stderr:\n{}", ran.stderr);
+    let files = files_in(&out);
+    for name in ["mesh.msh", "mesh.vtu", "mesh.png", "report.json", "deformation.gif"] {
+        assert!(files.iter().any(|f| f == name), "no {name} in {files:?}");
+    }
+    for t in ["0.00", "0.30", "0.60", "1.00"] {
+        let png = std::fs::read(out.join(format!("frame_t{t}.png"))).unwrap_or_else(|e| panic!("frame t = {t}: {e}; files {files:?}"));
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "frame t = {t} is not a PNG");
+    }
+    assert!(std::fs::read(out.join("deformation.gif")).unwrap().starts_with(b"GIF89a"));
+    assert_eq!(read_json(&out.join("report.json"))["invalid_cells"], 0);
+}
