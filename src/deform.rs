@@ -248,9 +248,9 @@ impl Deformation {
         boundary.check_reachable()?;
         // constraint kinds are fixed for the run: build the pattern once
         let n = mesh.num_nodes();
-        let mut constraints = vec![NodeConstraint::Free; n];
+        let mut constraints = vec![NodeConstraint::free(); n];
         boundary.fill_constraints(0.0, &mesh.nodes, |_| 1.0, &mut constraints);
-        let mut system = DivCurlSystem::new(&mesh, &constraints);
+        let mut system = DivCurlSystem::new(&mesh.cells, &constraints);
         system.div_weight = options.div_weight;
         let t0 = Instant::now();
         solver.analyze(system.pattern())?;
@@ -615,22 +615,22 @@ impl Boundary {
         for i in 0..self.roles.len() {
             let x = nodes[i];
             out[i] = match self.roles[i] {
-                Role::Interior => NodeConstraint::Free,
+                Role::Interior => NodeConstraint::free(),
                 Role::Corner { path } => {
                     let v = path.and_then(|(c, s)| self.chain_velocity(c, s)).unwrap_or([0.0; 2]);
-                    NodeConstraint::Fixed { value: [v[0] / f(i), v[1] / f(i)] }
+                    NodeConstraint::fixed([v[0] / f(i), v[1] / f(i)])
                 }
                 Role::Chain { chain, s } => match &self.parts[self.chains[chain].part].kind {
-                    PartKind::Fixed => NodeConstraint::Fixed { value: [0.0; 2] },
-                    PartKind::Slip { .. } => NodeConstraint::Normal { n: self.chain_normal(chain, s, t, x), value: 0.0 },
+                    PartKind::Fixed => NodeConstraint::fixed([0.0; 2]),
+                    PartKind::Slip { .. } => NodeConstraint::normal(self.chain_normal(chain, s, t, x), 0.0),
                     PartKind::Move { mode: MoveMode::Dirichlet, .. } => {
                         let v = self.chain_velocity(chain, s).unwrap_or([0.0; 2]);
-                        NodeConstraint::Fixed { value: [v[0] / f(i), v[1] / f(i)] }
+                        NodeConstraint::fixed([v[0] / f(i), v[1] / f(i)])
                     }
                     PartKind::Move { mode: MoveMode::Sliding, .. } => {
                         let v = self.chain_velocity(chain, s).unwrap_or([0.0; 2]);
                         let n = self.chain_normal(chain, s, t, x);
-                        NodeConstraint::Normal { n, value: (v[0] * n[0] + v[1] * n[1]) / f(i) }
+                        NodeConstraint::normal(n, (v[0] * n[0] + v[1] * n[1]) / f(i))
                     }
                 },
             };

@@ -1,70 +1,95 @@
 //! Least-squares finite elements for the div-curl system
-//! `div u = g`, `curl u = 0` with bilinear (Q1) quadrilaterals.
+//! `div u = g`, `curl u = 0` with Q1 elements: bilinear quadrilaterals
+//! (D = 2, N = 4 nodes) and trilinear hexahedra (D = 3, N = 8).
 //!
-//! The discrete functional is `w‖div u − g‖² + ‖curl u‖²`. Boundary
-//! conditions are imposed exactly, without penalties: a node's two
-//! unknowns are rotated into its frame (normal, tangent) and constrained
-//! components are eliminated, so the reduced system stays symmetric
-//! positive definite. The sparsity pattern depends only on which
-//! components are constrained, which never changes during a run: it is
-//! built once ([`DivCurlSystem::new`]) and refilled each step
+//! The discrete functional is `w‖div u − g‖² + ‖curl u‖²` (the curl is a
+//! scalar in 2D, a vector in 3D). Boundary conditions are imposed
+//! exactly, without penalties: a node's unknowns are the components of u
+//! in an orthonormal frame of its own, the leading ones of which may be
+//! prescribed and are eliminated, so the reduced system stays symmetric
+//! positive definite. The sparsity pattern depends only on how many
+//! components each node has prescribed, which never changes during a run:
+//! it is built once ([`DivCurlSystem::new`]) and refilled each step
 //! ([`DivCurlSystem::assemble`]).
 
-use crate::mesh::{colour_cells, Point2, QuadMesh};
+use crate::mesh::{colour_cells, Point2};
 use crate::solve::SparsePattern;
 use rayon::prelude::*;
 
-/// The boundary condition of one node, in the form the assembly needs.
+/// The boundary condition of one node: u's components along the columns
+/// of `frame` (orthonormal) are the node's unknowns, and the first
+/// `fixed` of them are prescribed by `values`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum NodeConstraint {
-    /// Interior node: both components free.
-    Free,
-    /// `u·n = value` with unit normal `n`; the tangential part is free.
-    Normal {
-        /// Unit normal.
-        n: Point2,
-        /// Prescribed normal component.
-        value: f64,
-    },
-    /// Both components prescribed (Dirichlet).
-    Fixed {
-        /// Prescribed vector.
-        value: Point2,
-    },
+pub struct Constraint<const D: usize> {
+    /// Orthonormal directions of the node's unknowns.
+    pub frame: [[f64; D]; D],
+    /// How many leading components are prescribed.
+    pub fixed: usize,
+    /// Prescribed values of the leading components.
+    pub values: [f64; D],
 }
 
-impl NodeConstraint {
-    /// The node's frame: columns are the directions of its two unknowns.
-    fn frame(&self) -> [[f64; 2]; 2] {
-        match *self {
-            NodeConstraint::Normal { n, .. } => [n, [-n[1], n[0]]],
-            _ => [[1.0, 0.0], [0.0, 1.0]],
-        }
+/// A 2D node constraint.
+pub type NodeConstraint = Constraint<2>;
+
+impl<const D: usize> Constraint<D> {
+    /// Both (all) components free: an interior node.
+    pub fn free() -> Self {
+        Constraint { frame: identity(), fixed: 0, values: [0.0; D] }
     }
 
-    /// Prescribed values of the two rotated components (None = free).
-    fn fixed_values(&self) -> [Option<f64>; 2] {
-        match *self {
-            NodeConstraint::Free => [None, None],
-            NodeConstraint::Normal { value, .. } => [Some(value), None],
-            NodeConstraint::Fixed { value } => [Some(value[0]), Some(value[1])],
-        }
+    /// u prescribed (Dirichlet).
+    pub fn fixed(value: [f64; D]) -> Self {
+        Constraint { frame: identity(), fixed: D, values: value }
+    }
+}
+
+fn identity<const D: usize>() -> [[f64; D]; D] {
+    std::array::from_fn(|k| std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 }))
+}
+
+impl Constraint<2> {
+    /// `u·n = value` (n unit); the tangential part is free.
+    pub fn normal(n: Point2, value: f64) -> Self {
+        Constraint { frame: [n, [-n[1], n[0]]], fixed: 1, values: [value, 0.0] }
+    }
+}
+
+impl Constraint<3> {
+    /// `u·n = value` (n unit); the two tangential components are free.
+    pub fn normal(n: [f64; 3], value: f64) -> Self {
+        let (t1, t2) = complement(n);
+        Constraint { frame: [n, t1, t2], fixed: 1, values: [value, 0.0, 0.0] }
     }
 
-    fn kind(&self) -> u8 {
-        match self {
-            NodeConstraint::Free => 0,
-            NodeConstraint::Normal { .. } => 1,
-            NodeConstraint::Fixed { .. } => 2,
-        }
+    /// u's components across the unit direction `tau` equal those of `v`;
+    /// the component along `tau` is free: the node glides along a curve
+    /// with tangent `tau` that itself moves with velocity `v`.
+    pub fn along(tau: [f64; 3], v: [f64; 3]) -> Self {
+        let (e1, e2) = complement(tau);
+        let dot = |a: [f64; 3]| a[0] * v[0] + a[1] * v[1] + a[2] * v[2];
+        Constraint { frame: [e1, e2, tau], fixed: 2, values: [dot(e1), dot(e2), 0.0] }
     }
+}
+
+/// Two unit vectors completing the unit vector `n` to a right-handed
+/// orthonormal frame.
+pub fn complement(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    // start from the axis least aligned with n
+    let a = if n[0].abs() < 0.6 { [1.0, 0.0, 0.0] } else if n[1].abs() < 0.6 { [0.0, 1.0, 0.0] } else { [0.0, 0.0, 1.0] };
+    let d = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+    let t = [a[0] - d * n[0], a[1] - d * n[1], a[2] - d * n[2]];
+    let l = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+    let t1 = [t[0] / l, t[1] / l, t[2] / l];
+    let t2 = [n[1] * t1[2] - n[2] * t1[1], n[2] * t1[0] - n[0] * t1[2], n[0] * t1[1] - n[1] * t1[0]];
+    (t1, t2)
 }
 
 /// Errors of the assembly.
 #[derive(Debug, thiserror::Error)]
 pub enum LsfemError {
     /// The constraints changed kind since the pattern was built.
-    #[error("node {node}: constraint kind changed after the pattern was built")]
+    #[error("node {node}: the number of prescribed components changed after the pattern was built")]
     KindChanged {
         /// The node.
         node: usize,
@@ -81,57 +106,109 @@ pub enum LsfemError {
 
 const NONE: u32 = u32::MAX;
 /// Gauss points on [0,1]: 1/2 ∓ 1/(2√3), weight 1/2 each.
-const GAUSS: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
+pub const GAUSS: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
+/// Largest number of unknowns of one cell (a hexahedron: 8 × 3).
+const MAX_LOCAL: usize = 24;
 
-/// Shape-function gradients of the reference square [0,1]² at (ξ, η).
-pub fn q1_gradients(xi: f64, eta: f64) -> [[f64; 4]; 2] {
-    [
-        [-(1.0 - eta), 1.0 - eta, eta, -eta],
-        [-(1.0 - xi), -xi, xi, 1.0 - xi],
-    ]
+/// Reference coordinates of Q1 node `a` (Gmsh/VTK order: the bottom face
+/// counter-clockwise, then the top face).
+fn corner(a: usize, d: usize) -> f64 {
+    match d {
+        0 => [0.0, 1.0, 1.0, 0.0][a % 4],
+        1 => [0.0, 0.0, 1.0, 1.0][a % 4],
+        _ => (a / 4) as f64,
+    }
 }
 
-/// Shape functions of the reference square at (ξ, η).
-pub fn q1_values(xi: f64, eta: f64) -> [f64; 4] {
-    [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta]
+/// Shape functions of the reference cell [0,1]^D at ξ.
+pub fn q1_shape<const D: usize, const N: usize>(xi: [f64; D]) -> [f64; N] {
+    std::array::from_fn(|a| (0..D).map(|d| if corner(a, d) == 1.0 { xi[d] } else { 1.0 - xi[d] }).product())
 }
 
-/// Physical point, det J and physical gradients of a bilinear cell at (ξ, η).
+/// Reference gradients: `g[d][a] = ∂N_a/∂ξ_d`.
+pub fn q1_shape_gradients<const D: usize, const N: usize>(xi: [f64; D]) -> [[f64; N]; D] {
+    std::array::from_fn(|d| {
+        std::array::from_fn(|a| {
+            (0..D)
+                .map(|e| {
+                    let on = corner(a, e) == 1.0;
+                    match (e == d, on) {
+                        (true, true) => 1.0,
+                        (true, false) => -1.0,
+                        (false, true) => xi[e],
+                        (false, false) => 1.0 - xi[e],
+                    }
+                })
+                .product()
+        })
+    })
+}
+
+/// Physical point, det J and physical gradients of a Q1 cell at ξ.
 /// `J[i][j] = ∂x_i/∂ξ_j`; gradients are `J⁻ᵀ ∇_ξ N` — the transpose matters
 /// as soon as the cell is not a rectangle.
-pub fn q1_map(p: &[Point2; 4], xi: f64, eta: f64) -> (Point2, f64, [[f64; 4]; 2]) {
-    let n = q1_values(xi, eta);
-    let d = q1_gradients(xi, eta);
-    let mut x = [0.0; 2];
-    let mut j = [[0.0; 2]; 2];
-    for a in 0..4 {
-        for i in 0..2 {
+pub fn q1_eval<const D: usize, const N: usize>(p: &[[f64; D]; N], xi: [f64; D]) -> ([f64; D], f64, [[f64; N]; D]) {
+    let n: [f64; N] = q1_shape(xi);
+    let dn: [[f64; N]; D] = q1_shape_gradients(xi);
+    let mut x = [0.0; D];
+    let mut j = [[0.0; D]; D];
+    for a in 0..N {
+        for i in 0..D {
             x[i] += n[a] * p[a][i];
-            j[i][0] += d[0][a] * p[a][i];
-            j[i][1] += d[1][a] * p[a][i];
+            for k in 0..D {
+                j[i][k] += dn[k][a] * p[a][i];
+            }
         }
     }
-    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-    let mut g = [[0.0; 4]; 2];
-    for a in 0..4 {
-        g[0][a] = (j[1][1] * d[0][a] - j[1][0] * d[1][a]) / det;
-        g[1][a] = (-j[0][1] * d[0][a] + j[0][0] * d[1][a]) / det;
-    }
+    let (det, inv) = det_inverse(&j);
+    // ∇N = J⁻ᵀ ∇_ξ N: g[i][a] = Σ_k inv[k][i] dn[k][a]
+    let g = std::array::from_fn(|i| std::array::from_fn(|a| (0..D).map(|k| inv[k][i] * dn[k][a]).sum()));
     (x, det, g)
+}
+
+/// The 2D case of [`q1_eval`] with (ξ, η) arguments.
+pub fn q1_map(p: &[Point2; 4], xi: f64, eta: f64) -> (Point2, f64, [[f64; 4]; 2]) {
+    q1_eval(p, [xi, eta])
+}
+
+/// Determinant and inverse of a 2×2 or 3×3 matrix.
+fn det_inverse<const D: usize>(j: &[[f64; D]; D]) -> (f64, [[f64; D]; D]) {
+    let mut inv = [[0.0; D]; D];
+    if D == 2 {
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        inv[0][0] = j[1][1] / det;
+        inv[0][1] = -j[0][1] / det;
+        inv[1][0] = -j[1][0] / det;
+        inv[1][1] = j[0][0] / det;
+        return (det, inv);
+    }
+    let c = |r: usize, s: usize| {
+        let (r1, r2, s1, s2) = ((r + 1) % 3, (r + 2) % 3, (s + 1) % 3, (s + 2) % 3);
+        j[r1][s1] * j[r2][s2] - j[r1][s2] * j[r2][s1]
+    };
+    let det = j[0][0] * c(0, 0) + j[0][1] * c(0, 1) + j[0][2] * c(0, 2);
+    for r in 0..3 {
+        for s in 0..3 {
+            inv[s][r] = c(r, s) / det;
+        }
+    }
+    (det, inv)
+}
+
+/// Tensor Gauss points (2 per direction) of [0,1]^D with their weights.
+pub fn gauss_points<const D: usize>() -> impl Iterator<Item = ([f64; D], f64)> {
+    (0..1usize << D).map(|k| (std::array::from_fn(|d| GAUSS[(k >> d) & 1]), 1.0 / (1 << D) as f64))
 }
 
 /// The assembled reduced system: matrix values on a fixed pattern and the
 /// right-hand side, over the free (rotated) unknowns.
-pub struct DivCurlSystem {
-    cells: Vec<[usize; 4]>,
+pub struct DivCurlSystem<const D: usize = 2, const N: usize = 4> {
+    cells: Vec<[usize; N]>,
     colours: Vec<Vec<usize>>,
-    kinds: Vec<u8>,
-    /// Free-unknown index of each node's two rotated components.
-    dof: Vec<[u32; 2]>,
+    fixed_counts: Vec<usize>,
+    /// Free-unknown index of each node's rotated components (NONE if fixed).
+    dof: Vec<[u32; D]>,
     pattern: SparsePattern,
-    /// Per cell, the value position of each local pair (i ≥ j in global
-    /// order), 8×8 row-major; NONE where a component is constrained.
-    scatter: Vec<[u32; 64]>,
     /// Matrix values on `pattern`.
     pub values: Vec<f64>,
     /// Right-hand side over the free unknowns.
@@ -140,16 +217,16 @@ pub struct DivCurlSystem {
     pub div_weight: f64,
 }
 
-impl DivCurlSystem {
+impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
     /// Numbers the free unknowns and builds the pattern for `constraints`
-    /// (only their kinds matter here).
-    pub fn new(mesh: &QuadMesh, constraints: &[NodeConstraint]) -> DivCurlSystem {
+    /// (only their numbers of prescribed components matter here).
+    pub fn new(cells: &[[usize; N]], constraints: &[Constraint<D>]) -> Self {
         let mut next = 0u32;
-        let dof: Vec<[u32; 2]> = constraints
+        let dof: Vec<[u32; D]> = constraints
             .iter()
             .map(|c| {
-                c.fixed_values().map(|v| {
-                    if v.is_some() {
+                std::array::from_fn(|k| {
+                    if k < c.fixed {
                         NONE
                     } else {
                         next += 1;
@@ -158,47 +235,22 @@ impl DivCurlSystem {
                 })
             })
             .collect();
-        let n = next as usize;
-        let local = |cell: &[usize; 4]| -> [u32; 8] {
-            let mut l = [NONE; 8];
-            for a in 0..4 {
-                l[2 * a] = dof[cell[a]][0];
-                l[2 * a + 1] = dof[cell[a]][1];
-            }
-            l
-        };
-        let pairs = mesh.cells.iter().flat_map(|cell| {
-            let l = local(cell);
-            (0..64).filter_map(move |k| {
-                let (i, j) = (l[k / 8], l[k % 8]);
+        let pairs = cells.iter().flat_map(|cell| {
+            let l = local_dofs(cell, &dof);
+            (0..D * N * D * N).filter_map(move |k| {
+                let (i, j) = (l[k / (D * N)], l[k % (D * N)]);
                 (i != NONE && j != NONE).then_some((i as usize, j as usize))
             })
         });
-        let pattern = SparsePattern::from_pairs(n, pairs);
-        let scatter = mesh
-            .cells
-            .par_iter()
-            .map(|cell| {
-                let l = local(cell);
-                let mut s = [NONE; 64];
-                for k in 0..64 {
-                    let (i, j) = (l[k / 8], l[k % 8]);
-                    if i != NONE && j != NONE && i >= j {
-                        s[k] = pattern.position(i as usize, j as usize).expect("pattern entry") as u32;
-                    }
-                }
-                s
-            })
-            .collect();
+        let pattern = SparsePattern::from_pairs(next as usize, pairs);
         DivCurlSystem {
-            cells: mesh.cells.clone(),
-            colours: colour_cells(&mesh.cells, mesh.num_nodes()),
-            kinds: constraints.iter().map(NodeConstraint::kind).collect(),
+            cells: cells.to_vec(),
+            colours: colour_cells(cells, constraints.len()),
+            fixed_counts: constraints.iter().map(|c| c.fixed).collect(),
             dof,
             values: vec![0.0; pattern.nnz()],
-            rhs: vec![0.0; n],
+            rhs: vec![0.0; pattern.n],
             pattern,
-            scatter,
             div_weight: 1.0,
         }
     }
@@ -216,18 +268,18 @@ impl DivCurlSystem {
     /// Fills matrix and right-hand side for nodes at `nodes`, constraints
     /// `constraints` (same kinds as at construction) and the divergence
     /// data `g(x)` at physical points. Parallel over cells of one colour.
-    pub fn assemble<G>(&mut self, nodes: &[Point2], constraints: &[NodeConstraint], g: G) -> Result<(), LsfemError>
+    pub fn assemble<G>(&mut self, nodes: &[[f64; D]], constraints: &[Constraint<D>], g: G) -> Result<(), LsfemError>
     where
-        G: Fn(Point2) -> f64 + Sync,
+        G: Fn([f64; D]) -> f64 + Sync,
     {
-        if let Some(node) = (0..constraints.len()).find(|&i| constraints[i].kind() != self.kinds[i]) {
+        if let Some(node) = (0..constraints.len()).find(|&i| constraints[i].fixed != self.fixed_counts[i]) {
             return Err(LsfemError::KindChanged { node });
         }
         self.values.iter_mut().for_each(|v| *v = 0.0);
         self.rhs.iter_mut().for_each(|v| *v = 0.0);
         let values = SyncPtr(self.values.as_mut_ptr());
         let rhs = SyncPtr(self.rhs.as_mut_ptr());
-        let (cells, scatter, dof, w) = (&self.cells, &self.scatter, &self.dof, self.div_weight);
+        let (cells, dof, pattern, w) = (&self.cells, &self.dof, &self.pattern, self.div_weight);
         for group in &self.colours {
             group.par_iter().try_for_each(|&c| {
                 let cell = &cells[c];
@@ -236,28 +288,39 @@ impl DivCurlSystem {
                 let (k, f) = element(c, &p, &cons, w, &g)?;
                 // Cells of one colour share no node, hence no matrix entry
                 // and no rhs entry: these writes never race.
-                let (values, rhs) = (&values, &rhs);
-                scatter_element(&k, &f, &scatter[c], cell, &cons, dof, values, rhs);
+                scatter(&k, &f, &local_dofs(cell, dof), &cons, pattern, &values, &rhs);
                 Ok::<(), LsfemError>(())
             })?;
         }
         Ok(())
     }
 
-    /// Nodal velocities from the solution `x` of the reduced system:
-    /// free components from `x`, constrained ones from `constraints`,
-    /// rotated back to (x, y).
-    pub fn expand(&self, x: &[f64], constraints: &[NodeConstraint], out: &mut [Point2]) {
+    /// Nodal u from the solution `x` of the reduced system: free
+    /// components from `x`, prescribed ones from `constraints`, rotated
+    /// back to Cartesian components.
+    pub fn expand(&self, x: &[f64], constraints: &[Constraint<D>], out: &mut [[f64; D]]) {
         for (node, c) in constraints.iter().enumerate() {
-            let fixed = c.fixed_values();
-            let w: [f64; 2] = std::array::from_fn(|k| match fixed[k] {
-                Some(v) => v,
-                None => x[self.dof[node][k] as usize],
-            });
-            let r = c.frame();
-            out[node] = [r[0][0] * w[0] + r[1][0] * w[1], r[0][1] * w[0] + r[1][1] * w[1]];
+            let mut u = [0.0; D];
+            for k in 0..D {
+                let w = if k < c.fixed { c.values[k] } else { x[self.dof[node][k] as usize] };
+                for i in 0..D {
+                    u[i] += w * c.frame[k][i];
+                }
+            }
+            out[node] = u;
         }
     }
+}
+
+/// Global free-unknown numbers of a cell's local unknowns (node-major).
+fn local_dofs<const D: usize, const N: usize>(cell: &[usize; N], dof: &[[u32; D]]) -> [u32; MAX_LOCAL] {
+    let mut l = [NONE; MAX_LOCAL];
+    for a in 0..N {
+        for k in 0..D {
+            l[D * a + k] = dof[cell[a]][k];
+        }
+    }
+    l
 }
 
 #[derive(Clone, Copy)]
@@ -266,77 +329,103 @@ struct SyncPtr(*mut f64);
 unsafe impl Sync for SyncPtr {}
 unsafe impl Send for SyncPtr {}
 
-/// Element matrix (8×8, row-major) and vector in the nodes' rotated frames.
-fn element<G: Fn(Point2) -> f64>(
+/// The div row and curl rows of one quadrature point in the nodes' frames.
+fn rows<const D: usize, const N: usize>(grad: &[[f64; N]; D], cons: &[Constraint<D>; N], bd: &mut [f64; MAX_LOCAL], bc: &mut [[f64; MAX_LOCAL]; 3]) -> usize {
+    let ncurl = if D == 2 { 1 } else { 3 };
+    for a in 0..N {
+        let g: [f64; 3] = std::array::from_fn(|i| if i < D { grad[i][a] } else { 0.0 });
+        // coefficients of u_x, u_y, u_z of node a in div u and curl u
+        let div = g;
+        let curl: [[f64; 3]; 3] = if D == 2 {
+            [[-g[1], g[0], 0.0], [0.0; 3], [0.0; 3]]
+        } else {
+            [[0.0, -g[2], g[1]], [g[2], 0.0, -g[0]], [-g[1], g[0], 0.0]]
+        };
+        for (k, dir) in cons[a].frame.iter().enumerate() {
+            let l = D * a + k;
+            bd[l] = (0..D).map(|i| div[i] * dir[i]).sum();
+            for r in 0..ncurl {
+                bc[r][l] = (0..D).map(|i| curl[r][i] * dir[i]).sum();
+            }
+        }
+    }
+    ncurl
+}
+
+/// Element matrix (row-major, D·N square) and vector in the nodes' frames.
+fn element<const D: usize, const N: usize, G: Fn([f64; D]) -> f64>(
     c: usize,
-    p: &[Point2; 4],
-    cons: &[NodeConstraint; 4],
+    p: &[[f64; D]; N],
+    cons: &[Constraint<D>; N],
     w: f64,
     g: &G,
-) -> Result<([f64; 64], [f64; 8]), LsfemError> {
-    let frames = cons.map(|c| c.frame());
-    let mut k = [0.0; 64];
-    let mut f = [0.0; 8];
-    for &xi in &GAUSS {
-        for &eta in &GAUSS {
-            let (x, det, grad) = q1_map(p, xi, eta);
-            if !(det > 0.0) {
-                return Err(LsfemError::Inverted { cell: c, det });
-            }
-            let weight = 0.25 * det;
-            // div and curl rows in the rotated unknowns: b·R per node
-            let mut bd = [0.0; 8];
-            let mut bc = [0.0; 8];
-            for a in 0..4 {
-                let (dx, dy) = (grad[0][a], grad[1][a]);
-                for (k_, col) in frames[a].iter().enumerate() {
-                    bd[2 * a + k_] = dx * col[0] + dy * col[1];
-                    bc[2 * a + k_] = -dy * col[0] + dx * col[1];
+) -> Result<([f64; MAX_LOCAL * MAX_LOCAL], [f64; MAX_LOCAL]), LsfemError> {
+    let nd = D * N;
+    let mut k = [0.0; MAX_LOCAL * MAX_LOCAL];
+    let mut f = [0.0; MAX_LOCAL];
+    let mut bd = [0.0; MAX_LOCAL];
+    let mut bc = [[0.0; MAX_LOCAL]; 3];
+    for (xi, weight) in gauss_points::<D>() {
+        let (x, det, grad) = q1_eval(p, xi);
+        if !(det > 0.0) {
+            return Err(LsfemError::Inverted { cell: c, det });
+        }
+        let ncurl = rows(&grad, cons, &mut bd, &mut bc);
+        let wq = weight * det;
+        let gq = g(x);
+        for i in 0..nd {
+            f[i] += wq * w * gq * bd[i];
+            for j in 0..=i {
+                let mut v = w * bd[i] * bd[j];
+                for row in bc.iter().take(ncurl) {
+                    v += row[i] * row[j];
                 }
+                k[nd * i + j] += wq * v;
             }
-            let gq = g(x);
-            for i in 0..8 {
-                f[i] += weight * w * gq * bd[i];
-                for j in 0..8 {
-                    k[8 * i + j] += weight * (w * bd[i] * bd[j] + bc[i] * bc[j]);
-                }
-            }
+        }
+    }
+    for i in 0..nd {
+        for j in 0..i {
+            k[nd * j + i] = k[nd * i + j];
         }
     }
     Ok((k, f))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn scatter_element(
-    k: &[f64; 64],
-    f: &[f64; 8],
-    scatter: &[u32; 64],
-    cell: &[usize; 4],
-    cons: &[NodeConstraint; 4],
-    dof: &[[u32; 2]],
+fn scatter<const D: usize, const N: usize>(
+    k: &[f64; MAX_LOCAL * MAX_LOCAL],
+    f: &[f64; MAX_LOCAL],
+    l: &[u32; MAX_LOCAL],
+    cons: &[Constraint<D>; N],
+    pattern: &SparsePattern,
     values: &SyncPtr,
     rhs: &SyncPtr,
 ) {
-    let fixed: [Option<f64>; 8] = std::array::from_fn(|l| cons[l / 2].fixed_values()[l % 2]);
-    for i in 0..8 {
-        let gi = dof[cell[i / 2]][i % 2];
+    let nd = D * N;
+    let fixed = |j: usize| {
+        let c = &cons[j / D];
+        (j % D < c.fixed).then(|| c.values[j % D])
+    };
+    for i in 0..nd {
+        let gi = l[i];
         if gi == NONE {
             continue;
         }
-        // move the constrained columns to the right-hand side
+        // move the prescribed columns to the right-hand side
         let mut fi = f[i];
-        for j in 0..8 {
-            if let Some(v) = fixed[j] {
-                fi -= k[8 * i + j] * v;
+        for j in 0..nd {
+            if let Some(v) = fixed(j) {
+                fi -= k[nd * i + j] * v;
             }
         }
         // SAFETY: colour-disjoint cells, see `assemble`.
         unsafe {
             *rhs.0.add(gi as usize) += fi;
-            for j in 0..8 {
-                let pos = scatter[8 * i + j];
-                if pos != NONE {
-                    *values.0.add(pos as usize) += k[8 * i + j];
+            for j in 0..nd {
+                let gj = l[j];
+                if gj != NONE && gi >= gj {
+                    let pos = pattern.position(gi as usize, gj as usize).expect("entry in the pattern");
+                    *values.0.add(pos) += k[nd * i + j];
                 }
             }
         }
@@ -346,6 +435,7 @@ fn scatter_element(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::QuadMesh;
     use crate::solve::{CholeskySolver, SpdSolver};
 
     /// Solves the div-curl system for u = ∇ψ, ψ = sin(2x)eʸ: curl u = 0,
@@ -364,16 +454,16 @@ mod tests {
         let normals = [[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]];
         let cons: Vec<NodeConstraint> = (0..mesh.num_nodes())
             .map(|i| match parts[i].as_slice() {
-                [] => NodeConstraint::Free,
+                [] => NodeConstraint::free(),
                 [s] => {
                     let nrm = normals[*s];
                     let u = exact(mesh.nodes[i]);
-                    NodeConstraint::Normal { n: nrm, value: u[0] * nrm[0] + u[1] * nrm[1] }
+                    NodeConstraint::normal(nrm, u[0] * nrm[0] + u[1] * nrm[1])
                 }
-                _ => NodeConstraint::Fixed { value: exact(mesh.nodes[i]) },
+                _ => NodeConstraint::fixed(exact(mesh.nodes[i])),
             })
             .collect();
-        let mut sys = DivCurlSystem::new(&mesh, &cons);
+        let mut sys = DivCurlSystem::<2, 4>::new(&mesh.cells, &cons);
         sys.assemble(&mesh.nodes, &cons, |x| -3.0 * (2.0 * x[0]).sin() * x[1].exp()).unwrap();
         let mut solver = CholeskySolver::new();
         solver.analyze(sys.pattern()).unwrap();
@@ -401,15 +491,15 @@ mod tests {
         let normals = [[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]];
         let cons: Vec<NodeConstraint> = (0..mesh.num_nodes())
             .map(|i| match parts[i].as_slice() {
-                [] => NodeConstraint::Free,
+                [] => NodeConstraint::free(),
                 [s] => {
                     let u = exact(mesh.nodes[i]);
-                    NodeConstraint::Normal { n: normals[*s], value: u[0] * normals[*s][0] + u[1] * normals[*s][1] }
+                    NodeConstraint::normal(normals[*s], u[0] * normals[*s][0] + u[1] * normals[*s][1])
                 }
-                _ => NodeConstraint::Fixed { value: exact(mesh.nodes[i]) },
+                _ => NodeConstraint::fixed(exact(mesh.nodes[i])),
             })
             .collect();
-        let mut sys = DivCurlSystem::new(&mesh, &cons);
+        let mut sys = DivCurlSystem::<2, 4>::new(&mesh.cells, &cons);
         sys.assemble(&mesh.nodes, &cons, |_| 2.0).unwrap();
         let mut solver = CholeskySolver::new();
         solver.analyze(sys.pattern()).unwrap();
@@ -436,13 +526,91 @@ mod tests {
         }
     }
 
+    /// The 3D analogue: u = ∇ψ, ψ = sin(2x) eʸ cos z, div u = −4 sin(2x) eʸ cos z,
+    /// on a distorted brick; normal components on faces, u on edges.
+    fn solve_3d(n: usize) -> f64 {
+        use crate::mesh::HexMesh;
+        let mut mesh = HexMesh::structured_box([0.0; 3], [1.0; 3], [n, n, n]);
+        for p in &mut mesh.nodes {
+            let s = 0.05 * (std::f64::consts::PI * p[0]).sin() * (std::f64::consts::PI * p[1]).sin() * (std::f64::consts::PI * p[2]).sin();
+            *p = [p[0] + s, p[1] - s, p[2] + 0.5 * s];
+        }
+        let exact = |p: [f64; 3]| {
+            let (s, c, e) = ((2.0 * p[0]).sin(), (2.0 * p[0]).cos(), p[1].exp());
+            [2.0 * c * e * p[2].cos(), s * e * p[2].cos(), -s * e * p[2].sin()]
+        };
+        let normals = [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0, 1.0]];
+        let mut parts = vec![Vec::new(); mesh.num_nodes()];
+        for f in &mesh.faces {
+            for &v in &f.nodes {
+                if !parts[v].contains(&f.part) {
+                    parts[v].push(f.part);
+                }
+            }
+        }
+        let cons: Vec<Constraint<3>> = (0..mesh.num_nodes())
+            .map(|i| {
+                let u = exact(mesh.nodes[i]);
+                match parts[i].as_slice() {
+                    [] => Constraint::free(),
+                    [f] => {
+                        let nv = normals[*f];
+                        Constraint::<3>::normal(nv, u[0] * nv[0] + u[1] * nv[1] + u[2] * nv[2])
+                    }
+                    _ => Constraint::fixed(u),
+                }
+            })
+            .collect();
+        let mut sys = DivCurlSystem::<3, 8>::new(&mesh.cells, &cons);
+        sys.assemble(&mesh.nodes, &cons, |x| -4.0 * (2.0 * x[0]).sin() * x[1].exp() * x[2].cos()).unwrap();
+        let mut solver = CholeskySolver::new();
+        solver.analyze(sys.pattern()).unwrap();
+        solver.factor(&sys.values).unwrap();
+        let mut x = sys.rhs.clone();
+        solver.solve_in_place(&mut x).unwrap();
+        let mut u = vec![[0.0; 3]; mesh.num_nodes()];
+        sys.expand(&x, &cons, &mut u);
+        u.iter()
+            .zip(&mesh.nodes)
+            .map(|(u, p)| {
+                let e = exact(*p);
+                (0..3).map(|k| (u[k] - e[k]).abs()).fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn converges_in_3d() {
+        let (e1, e2, e3) = (solve_3d(4), solve_3d(8), solve_3d(16));
+        let (r1, r2) = ((e1 / e2).log2(), (e2 / e3).log2());
+        assert!(r1 > 1.6 && r2 > 1.6, "errors {e1:e} {e2:e} {e3:e}, rates {r1} {r2}");
+    }
+
+    #[test]
+    fn along_constraint_prescribes_the_normal_plane() {
+        let tau = [0.6, 0.0, 0.8];
+        let v = [1.0, 2.0, 3.0];
+        let c = Constraint::<3>::along(tau, v);
+        // the prescribed part equals v minus its component along tau
+        let mut u = [0.0; 3];
+        for k in 0..2 {
+            for i in 0..3 {
+                u[i] += c.values[k] * c.frame[k][i];
+            }
+        }
+        let vt = v[0] * tau[0] + v[1] * tau[1] + v[2] * tau[2];
+        for i in 0..3 {
+            assert!((u[i] - (v[i] - vt * tau[i])).abs() < 1e-14);
+        }
+    }
+
     #[test]
     fn changed_kind_is_an_error() {
         let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 2, 2);
-        let mut cons = vec![NodeConstraint::Fixed { value: [0.0; 2] }; 9];
-        cons[4] = NodeConstraint::Free;
-        let mut sys = DivCurlSystem::new(&mesh, &cons);
-        cons[4] = NodeConstraint::Normal { n: [1.0, 0.0], value: 0.0 };
+        let mut cons = vec![NodeConstraint::fixed([0.0; 2]); 9];
+        cons[4] = NodeConstraint::free();
+        let mut sys = DivCurlSystem::<2, 4>::new(&mesh.cells, &cons);
+        cons[4] = NodeConstraint::normal([1.0, 0.0], 0.0);
         assert!(matches!(sys.assemble(&mesh.nodes, &cons, |_| 0.0), Err(LsfemError::KindChanged { node: 4 })));
     }
 }

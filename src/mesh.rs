@@ -152,7 +152,7 @@ pub fn quad_area(p: &[Point2; 4]) -> f64 {
 /// Greedy colouring of the cells so that no two cells of one colour share
 /// a node: cells of one colour can then be scattered into a global matrix
 /// in parallel without write conflicts. Returns the cells grouped by colour.
-pub fn colour_cells(cells: &[[usize; 4]], num_nodes: usize) -> Vec<Vec<usize>> {
+pub fn colour_cells<const N: usize>(cells: &[[usize; N]], num_nodes: usize) -> Vec<Vec<usize>> {
     // node_colours[n] is a bit set of the colours already touching node n
     let mut node_colours = vec![0u64; num_nodes];
     let mut groups: Vec<Vec<usize>> = Vec::new();
@@ -190,5 +190,142 @@ mod colour_tests {
                 }
             }
         }
+    }
+}
+
+/// A point or vector in space.
+pub type Point3 = [f64; 3];
+
+/// One quadrilateral face of the boundary of a hex mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoundaryFace {
+    /// The four nodes, counter-clockwise seen from outside (the
+    /// right-hand rule gives the outward normal).
+    pub nodes: [usize; 4],
+    /// Index into [`HexMesh::part_names`].
+    pub part: usize,
+}
+
+/// A linear (Q1) hexahedral mesh with named boundary parts.
+///
+/// Cells list their nodes as Gmsh's HEX_8 and VTK_HEXAHEDRON do: the
+/// bottom face (ζ = 0) counter-clockwise seen from above, then the top face
+/// in the same order: (0,0,0) (1,0,0) (1,1,0) (0,1,0) (0,0,1) (1,0,1)
+/// (1,1,1) (0,1,1) in reference coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HexMesh {
+    /// Node coordinates.
+    pub nodes: Vec<Point3>,
+    /// Cells as eight node indices.
+    pub cells: Vec<[usize; 8]>,
+    /// Boundary faces with their part.
+    pub faces: Vec<BoundaryFace>,
+    /// Names of the boundary parts (physical groups of dimension 2).
+    pub part_names: Vec<String>,
+}
+
+/// The six faces of a structured brick, in the order used for part
+/// indices of a freshly generated brick.
+pub const BOX_FACES: [&str; 6] = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
+
+impl HexMesh {
+    /// A structured `n[0] × n[1] × n[2]` mesh of the brick `[lo, hi]`,
+    /// nodes numbered x fastest, then y, then z. Boundary parts are the six
+    /// faces named as in [`BOX_FACES`].
+    pub fn structured_box(lo: Point3, hi: Point3, n: [usize; 3]) -> HexMesh {
+        let [nx, ny, nz] = n;
+        let id = |i: usize, j: usize, k: usize| (k * (ny + 1) + j) * (nx + 1) + i;
+        let coord = |d: usize, i: usize, m: usize| if i == m { hi[d] } else { lo[d] + (hi[d] - lo[d]) * i as f64 / m as f64 };
+        let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
+        for k in 0..=nz {
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    nodes.push([coord(0, i, nx), coord(1, j, ny), coord(2, k, nz)]);
+                }
+            }
+        }
+        let mut cells = Vec::with_capacity(nx * ny * nz);
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    cells.push([
+                        id(i, j, k),
+                        id(i + 1, j, k),
+                        id(i + 1, j + 1, k),
+                        id(i, j + 1, k),
+                        id(i, j, k + 1),
+                        id(i + 1, j, k + 1),
+                        id(i + 1, j + 1, k + 1),
+                        id(i, j + 1, k + 1),
+                    ]);
+                }
+            }
+        }
+        let mut faces = Vec::new();
+        // each face listed counter-clockwise seen from outside
+        for k in 0..nz {
+            for j in 0..ny {
+                faces.push(BoundaryFace { nodes: [id(0, j, k), id(0, j, k + 1), id(0, j + 1, k + 1), id(0, j + 1, k)], part: 0 });
+                faces.push(BoundaryFace { nodes: [id(nx, j, k), id(nx, j + 1, k), id(nx, j + 1, k + 1), id(nx, j, k + 1)], part: 1 });
+            }
+        }
+        for k in 0..nz {
+            for i in 0..nx {
+                faces.push(BoundaryFace { nodes: [id(i, 0, k), id(i + 1, 0, k), id(i + 1, 0, k + 1), id(i, 0, k + 1)], part: 2 });
+                faces.push(BoundaryFace { nodes: [id(i, ny, k), id(i, ny, k + 1), id(i + 1, ny, k + 1), id(i + 1, ny, k)], part: 3 });
+            }
+        }
+        for j in 0..ny {
+            for i in 0..nx {
+                faces.push(BoundaryFace { nodes: [id(i, j, 0), id(i, j + 1, 0), id(i + 1, j + 1, 0), id(i + 1, j, 0)], part: 4 });
+                faces.push(BoundaryFace { nodes: [id(i, j, nz), id(i + 1, j, nz), id(i + 1, j + 1, nz), id(i, j + 1, nz)], part: 5 });
+            }
+        }
+        HexMesh { nodes, cells, faces, part_names: BOX_FACES.iter().map(|s| s.to_string()).collect() }
+    }
+
+    /// Number of nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of cells.
+    pub fn num_cells(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// Coordinates of the eight nodes of cell `c`.
+    pub fn cell_coords(&self, c: usize) -> [Point3; 8] {
+        self.cells[c].map(|n| self.nodes[n])
+    }
+}
+
+#[cfg(test)]
+mod hex_tests {
+    use super::*;
+
+    #[test]
+    fn brick_counts_and_outward_faces() {
+        let m = HexMesh::structured_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], [3, 2, 2]);
+        assert_eq!(m.num_nodes(), 4 * 3 * 3);
+        assert_eq!(m.num_cells(), 12);
+        assert_eq!(m.faces.len(), 2 * (2 * 2 + 3 * 2 + 3 * 2));
+        let centre = [1.0, 0.5, 0.5];
+        for f in &m.faces {
+            let p = f.nodes.map(|n| m.nodes[n]);
+            let (a, b) = (sub3(p[2], p[0]), sub3(p[3], p[1]));
+            let n = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+            let out = sub3(p[0], centre);
+            assert!(n[0] * out[0] + n[1] * out[1] + n[2] * out[2] > 0.0, "face {f:?} points inward");
+        }
+        // the first cell is positively oriented: (p1−p0)·((p3−p0)×(p4−p0)) > 0
+        let p = m.cell_coords(0);
+        let (a, b, c) = (sub3(p[1], p[0]), sub3(p[3], p[0]), sub3(p[4], p[0]));
+        let det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+        assert!(det > 0.0);
+    }
+
+    fn sub3(a: Point3, b: Point3) -> Point3 {
+        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
     }
 }
