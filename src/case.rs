@@ -7,7 +7,7 @@
 use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind};
 use crate::expr::Expr;
 use crate::geometry::ShapeSpec;
-use crate::jacobian::{ImageField, JacobianField, Target, TimePath};
+use crate::jacobian::{lift, ImageField, JacobianField, Target, TimePath, EXPR_VARS};
 use crate::mesh::{QuadMesh, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -331,7 +331,7 @@ impl Case {
         Ok(match &self.jacobian {
             JacobianSpec::Uniform => JacobianField::uniform(),
             JacobianSpec::Expression { f, path } => {
-                let expr = Expr::parse(f, &["x", "y", "t"]).map_err(|e| err(format!("field `jacobian.f`: {e}")))?;
+                let expr = Expr::parse(f, &EXPR_VARS).map_err(|e| err(format!("field `jacobian.f`: {e}")))?;
                 JacobianField { target: Target::Expression(expr), path: *path }
             }
             JacobianSpec::Image { file: img, lower, upper, floor, invert, smooth, path } => {
@@ -352,7 +352,7 @@ fn check_positive(field: &JacobianField, mesh: &QuadMesh) -> Result<(), crate::j
     });
     for x in mesh.nodes.iter().copied().chain(centres) {
         for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
-            field.g_checked(x, t)?;
+            field.g_checked(lift(x), t)?;
         }
     }
     Ok(())

@@ -16,7 +16,7 @@
 //! 2D and so follows a prescribed path.
 
 use crate::geometry::Shape;
-use crate::jacobian::{normalise, JacobianError, JacobianField, Normalisation};
+use crate::jacobian::{edge_flux_points, lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{DivCurlSystem, LsfemError, NodeConstraint};
 use crate::mesh::{Point2, QuadMesh};
 use crate::quality::{corner_jacobians, invalid_cells};
@@ -299,13 +299,14 @@ impl Deformation {
     pub fn normalisation_now(&self) -> Result<Normalisation, DeformError> {
         let mut bvel = vec![[0.0; 2]; self.mesh.num_nodes()];
         self.boundary.velocities(&mut bvel);
-        Ok(normalise(&self.mesh, &self.mesh.nodes, &self.field, self.t, self.area0, &bvel)?)
+        let flux = edge_flux_points(&self.mesh, &self.mesh.nodes, &bvel);
+        Ok(normalise(&self.mesh.cells, &self.mesh.nodes, &self.field, self.t, self.area0, flux)?)
     }
 
     /// J/f per cell at the current state (see [`crate::quality::jf_ratios`]).
     pub fn jf_now(&self) -> Result<Vec<f64>, DeformError> {
         let norm = self.normalisation_now()?;
-        Ok(crate::quality::jf_ratios(&self.mesh, &self.start, &self.field, &norm))
+        Ok(crate::quality::jf_ratios(&self.mesh.cells, &self.mesh.nodes, &self.start, &self.field, &norm))
     }
 
     /// Number of unknowns of the reduced LSFEM system.
@@ -429,11 +430,12 @@ impl Deformation {
     fn node_velocity(&mut self, nodes: &[Point2], t: f64) -> Result<(), StepFailure> {
         let t0 = Instant::now();
         self.boundary.velocities(&mut self.bvel);
-        let norm = normalise(&self.mesh, nodes, &self.field, t, self.area0, &self.bvel).map_err(DeformError::from)?;
+        let flux = edge_flux_points(&self.mesh, nodes, &self.bvel);
+        let norm = normalise(&self.mesh.cells, nodes, &self.field, t, self.area0, flux).map_err(DeformError::from)?;
         let field = &self.field;
-        self.boundary.fill_constraints(t, nodes, |i| norm.f(field, nodes[i]), &mut self.constraints);
+        self.boundary.fill_constraints(t, nodes, |i| norm.f(field, lift(nodes[i])), &mut self.constraints);
         self.system
-            .assemble(nodes, &self.constraints, |x| norm.div_data(field, x))
+            .assemble(nodes, &self.constraints, |x| norm.div_data(field, lift(x)))
             .map_err(|e| match e {
                 LsfemError::Inverted { cell, .. } => StepFailure::Inverted(cell),
                 other => StepFailure::Fatal(other.into()),
@@ -449,7 +451,7 @@ impl Deformation {
         self.stats.solves += 1;
         self.system.expand(&self.x, &self.constraints, &mut self.u);
         for (i, u) in self.u.iter_mut().enumerate() {
-            let f = norm.f(field, nodes[i]);
+            let f = norm.f(field, lift(nodes[i]));
             *u = [f * u[0], f * u[1]];
         }
         Ok(())

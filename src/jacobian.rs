@@ -7,8 +7,8 @@
 //! from the transport theorem, which makes `∫ div u = ∮ u·n` hold.
 
 use crate::expr::Expr;
-use crate::lsfem::q1_map;
-use crate::mesh::{Point2, QuadMesh};
+use crate::lsfem::{gauss_points, q1_eval, GAUSS};
+use crate::mesh::{Point2, Point3, QuadMesh};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -16,10 +16,10 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum JacobianError {
     /// g is zero, negative or not finite somewhere the mesh reaches.
-    #[error("prescribed Jacobian is not positive: g = {value} at (x, y) = ({:.6}, {:.6}), t = {t:.4}", x[0], x[1])]
+    #[error("prescribed Jacobian is not positive: g = {value} at (x, y, z) = ({:.6}, {:.6}, {:.6}), t = {t:.4}", x[0], x[1], x[2])]
     NotPositive {
-        /// The point.
-        x: Point2,
+        /// The point (z = 0 in 2D).
+        x: Point3,
         /// The pseudo-time.
         t: f64,
         /// The value found.
@@ -90,8 +90,9 @@ impl ImageField {
         Ok(ImageField { width, height, luma, lo, hi, floor, invert })
     }
 
-    /// g₁ at x: bilinear in the picture, 1 outside its rectangle.
-    pub fn value(&self, x: Point2) -> f64 {
+    /// g₁ at x (its z is ignored): bilinear in the picture, 1 outside its
+    /// rectangle.
+    pub fn value(&self, x: Point3) -> f64 {
         let u = (x[0] - self.lo[0]) / (self.hi[0] - self.lo[0]);
         let v = (x[1] - self.lo[1]) / (self.hi[1] - self.lo[1]);
         if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
@@ -132,11 +133,15 @@ fn box_blur(src: &[f64], w: usize, h: usize) -> Vec<f64> {
 pub enum Target {
     /// f follows only the change of area: g ≡ 1.
     Uniform,
-    /// g₁(x, y) as an expression in x, y; or g(x, y, t) when it uses t.
+    /// g₁ as an expression in x, y, z; or g(x, y, z, t) when it uses t.
+    /// Its variables are, in order, `x, y, z, t` ([`EXPR_VARS`]).
     Expression(Expr),
     /// g₁ from a picture.
     Image(ImageField),
 }
+
+/// The variables of expression fields, in evaluation order.
+pub const EXPR_VARS: [&str; 4] = ["x", "y", "z", "t"];
 
 /// A prescribed Jacobian: target plus time path.
 #[derive(Clone, Debug)]
@@ -153,7 +158,7 @@ impl JacobianField {
         JacobianField { target: Target::Uniform, path: TimePath::Linear }
     }
 
-    /// An expression in x, y (and optionally t). Variables are `x, y, t`.
+    /// An expression in x, y, z (and optionally t), parsed with [`EXPR_VARS`].
     pub fn expression(expr: Expr) -> JacobianField {
         JacobianField { target: Target::Expression(expr), path: TimePath::Linear }
     }
@@ -171,21 +176,21 @@ impl JacobianField {
     }
 
     /// The target g₁(x) at t = 1 (for path-based fields).
-    fn g1(&self, x: Point2) -> f64 {
+    fn g1(&self, x: Point3) -> f64 {
         match &self.target {
             Target::Uniform => 1.0,
-            Target::Expression(e) => e.eval(&[x[0], x[1], 1.0]),
+            Target::Expression(e) => e.eval(&[x[0], x[1], x[2], 1.0]),
             Target::Image(img) => img.value(x),
         }
     }
 
     /// g(x, t) and ∂g/∂t.
-    pub fn g_and_dt(&self, x: Point2, t: f64) -> (f64, f64) {
+    pub fn g_and_dt(&self, x: Point3, t: f64) -> (f64, f64) {
         if let Some(e) = self.time_dependent_expr() {
             // central difference: the expression is arbitrary text
             let h = 1e-6;
-            let g = e.eval(&[x[0], x[1], t]);
-            let gt = (e.eval(&[x[0], x[1], t + h]) - e.eval(&[x[0], x[1], t - h])) / (2.0 * h);
+            let at = |t: f64| e.eval(&[x[0], x[1], x[2], t]);
+            let (g, gt) = (at(t), (at(t + h) - at(t - h)) / (2.0 * h));
             return (g, gt);
         }
         if self.is_uniform() {
@@ -202,7 +207,7 @@ impl JacobianField {
     }
 
     /// g(x, t), checked positive and finite.
-    pub fn g_checked(&self, x: Point2, t: f64) -> Result<(f64, f64), JacobianError> {
+    pub fn g_checked(&self, x: Point3, t: f64) -> Result<(f64, f64), JacobianError> {
         let (g, gt) = self.g_and_dt(x, t);
         if !(g > 0.0 && g.is_finite() && gt.is_finite()) {
             return Err(JacobianError::NotPositive { x, t, value: g });
@@ -224,60 +229,69 @@ pub struct Normalisation {
 
 impl Normalisation {
     /// `−∂_t(1/f)` at x: the right-hand side of `div u`.
-    pub fn div_data(&self, field: &JacobianField, x: Point2) -> f64 {
+    pub fn div_data(&self, field: &JacobianField, x: Point3) -> f64 {
         let (g, gt) = field.g_and_dt(x, self.t);
         self.c_dot / (self.c * self.c * g) + gt / (self.c * g * g)
     }
 
     /// f(x, t) = c(t) g(x, t).
-    pub fn f(&self, field: &JacobianField, x: Point2) -> f64 {
+    pub fn f(&self, field: &JacobianField, x: Point3) -> f64 {
         self.c * field.g_and_dt(x, self.t).0
     }
 }
 
-/// Computes c(t) and c'(t) on the mesh of Ω_t given by `mesh`'s cells and
-/// edges at positions `nodes`: `area0` = |Ω₀|, `boundary_velocity` the
-/// nodal velocity v of the moving boundary (zero elsewhere; only v·n on
-/// boundary edges matters). Fails where g ≤ 0.
-pub fn normalise(
-    mesh: &QuadMesh,
-    nodes: &[Point2],
+/// A point in 2D or 3D as a point in space (z = 0 in 2D).
+pub fn lift<const D: usize>(x: [f64; D]) -> Point3 {
+    std::array::from_fn(|i| if i < D { x[i] } else { 0.0 })
+}
+
+/// Computes c(t) and c'(t) on the mesh of Ω_t given by `cells` at
+/// positions `nodes`: `volume0` = |Ω₀|, `boundary` the quadrature of the
+/// boundary flux, pairs (x, v·n dS) with v the velocity of the moving
+/// boundary. Fails where g ≤ 0.
+pub fn normalise<const D: usize, const N: usize>(
+    cells: &[[usize; N]],
+    nodes: &[[f64; D]],
     field: &JacobianField,
     t: f64,
-    area0: f64,
-    boundary_velocity: &[Point2],
+    volume0: f64,
+    boundary: impl Iterator<Item = ([f64; D], f64)>,
 ) -> Result<Normalisation, JacobianError> {
-    const GP: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
-    let (inv_g, dt_term) = (0..mesh.num_cells())
-        .into_par_iter()
-        .map(|c| {
-            let p = mesh.cells[c].map(|n| nodes[n]);
+    let (inv_g, dt_term) = cells
+        .par_iter()
+        .map(|cell| {
+            let p = cell.map(|n| nodes[n]);
             let mut acc = (0.0, 0.0);
-            for &xi in &GP {
-                for &eta in &GP {
-                    let (x, det, _) = q1_map(&p, xi, eta);
-                    let (g, gt) = field.g_checked(x, t)?;
-                    acc.0 += 0.25 * det / g;
-                    acc.1 -= 0.25 * det * gt / (g * g);
-                }
+            for (xi, w) in gauss_points::<D>() {
+                let (x, det, _) = q1_eval(&p, xi);
+                let (g, gt) = field.g_checked(lift(x), t)?;
+                acc.0 += w * det / g;
+                acc.1 -= w * det * gt / (g * g);
             }
             Ok(acc)
         })
         .try_reduce(|| (0.0, 0.0), |a, b| Ok((a.0 + b.0, a.1 + b.1)))?;
     let mut flux = 0.0;
-    for e in &mesh.edges {
+    for (x, vn_ds) in boundary {
+        flux += vn_ds / field.g_checked(lift(x), t)?.0;
+    }
+    Ok(Normalisation { t, c: inv_g / volume0, c_dot: (dt_term + flux) / volume0 })
+}
+
+/// The boundary-flux quadrature of a quad mesh (two Gauss points per
+/// edge): pairs (x, v·n ds) for nodal boundary velocities `velocity`.
+pub fn edge_flux_points<'a>(mesh: &'a QuadMesh, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
+    mesh.edges.iter().flat_map(move |e| {
         let (a, b) = (nodes[e.nodes[0]], nodes[e.nodes[1]]);
-        let (va, vb) = (boundary_velocity[e.nodes[0]], boundary_velocity[e.nodes[1]]);
+        let (va, vb) = (velocity[e.nodes[0]], velocity[e.nodes[1]]);
         // outward normal times length: the domain is on the edge's left
         let nds = [b[1] - a[1], -(b[0] - a[0])];
-        for s in GP {
+        GAUSS.map(|s| {
             let x = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
             let v = [va[0] + s * (vb[0] - va[0]), va[1] + s * (vb[1] - va[1])];
-            let (g, _) = field.g_checked(x, t)?;
-            flux += 0.5 * (v[0] * nds[0] + v[1] * nds[1]) / g;
-        }
-    }
-    Ok(Normalisation { t, c: inv_g / area0, c_dot: (dt_term + flux) / area0 })
+            (x, 0.5 * (v[0] * nds[0] + v[1] * nds[1]))
+        })
+    })
 }
 
 #[cfg(test)]
@@ -285,7 +299,11 @@ mod tests {
     use super::*;
 
     fn expr(s: &str) -> Expr {
-        Expr::parse(s, &["x", "y", "t"]).unwrap()
+        Expr::parse(s, &EXPR_VARS).unwrap()
+    }
+
+    fn normalise2(mesh: &QuadMesh, f: &JacobianField, t: f64, v: &[Point2]) -> Result<Normalisation, JacobianError> {
+        normalise(&mesh.cells, &mesh.nodes, f, t, 1.0, edge_flux_points(mesh, &mesh.nodes, v))
     }
 
     #[test]
@@ -293,10 +311,10 @@ mod tests {
         // the unit square stretched to [0,2]×[0,1], right side moving at v = (1, 0)
         let mut mesh = QuadMesh::structured_box([0.0, 0.0], [2.0, 1.0], 4, 3);
         let v: Vec<Point2> = mesh.nodes.iter().map(|p| if p[0] == 2.0 { [1.0, 0.0] } else { [0.0, 0.0] }).collect();
-        let n = normalise(&mesh, &mesh.nodes, &JacobianField::uniform(), 0.5, 1.0, &v).unwrap();
+        let n = normalise2(&mesh, &JacobianField::uniform(), 0.5, &v).unwrap();
         assert!((n.c - 2.0).abs() < 1e-14 && (n.c_dot - 1.0).abs() < 1e-14, "{n:?}");
         mesh.nodes[6] = [0.55, 0.3]; // an interior node: the area stays
-        assert!((normalise(&mesh, &mesh.nodes, &JacobianField::uniform(), 0.5, 1.0, &v).unwrap().c - 2.0).abs() < 1e-14);
+        assert!((normalise2(&mesh, &JacobianField::uniform(), 0.5, &v).unwrap().c - 2.0).abs() < 1e-14);
     }
 
     #[test]
@@ -305,7 +323,7 @@ mod tests {
         let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 64, 2);
         let f = JacobianField::expression(expr("1 + x"));
         let v = vec![[0.0; 2]; mesh.num_nodes()];
-        let n = normalise(&mesh, &mesh.nodes, &f, 1.0, 1.0, &v).unwrap();
+        let n = normalise2(&mesh, &f, 1.0, &v).unwrap();
         assert!((n.c - 2f64.ln()).abs() < 1e-6, "{}", n.c);
         // c' = −∫ g_t/g² = −∫ x/(1+x)² dx = −(ln 2 − 1/2)
         assert!((n.c_dot + (2f64.ln() - 0.5)).abs() < 1e-6, "{}", n.c_dot);
@@ -315,7 +333,7 @@ mod tests {
     fn non_positive_field_names_the_place() {
         let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 4, 4);
         let f = JacobianField::expression(expr("x - 0.5"));
-        let err = normalise(&mesh, &mesh.nodes, &f, 1.0, 1.0, &vec![[0.0; 2]; 25]).unwrap_err();
+        let err = normalise2(&mesh, &f, 1.0, &vec![[0.0; 2]; 25]).unwrap_err();
         let msg = err.to_string();
         assert!(msg.contains("not positive") && msg.contains("t = 1.0000"), "{msg}");
     }
@@ -323,7 +341,7 @@ mod tests {
     #[test]
     fn inverse_path_derivative_matches_difference() {
         let f = JacobianField { target: Target::Expression(expr("0.2 + x")), path: TimePath::Inverse };
-        let x = [0.3, 0.1];
+        let x = [0.3, 0.1, 0.0];
         for t in [0.1, 0.5, 0.9] {
             let (_, gt) = f.g_and_dt(x, t);
             let fd = (f.g_and_dt(x, t + 1e-6).0 - f.g_and_dt(x, t - 1e-6).0) / 2e-6;
