@@ -4,7 +4,7 @@
 //! Every table rejects unknown fields, and every error names the file and
 //! the field (toml's own errors add the line and column).
 
-use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind};
+use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, BoundaryShape};
 use crate::expr::Expr;
 use crate::geometry::ShapeSpec;
 use crate::jacobian::{lift, ImageField, JacobianField, Target, TimePath, EXPR_VARS};
@@ -362,7 +362,7 @@ fn check_positive(field: &JacobianField, mesh: &QuadMesh) -> Result<(), crate::j
 /// belong together.
 fn part_kind(spec: &PartSpec) -> Result<PartKind, String> {
     let shape = match &spec.shape {
-        Some(s) => Some(Arc::new(s.build().map_err(|e| format!("field `shape`: {e}"))?)),
+        Some(s) => Some(Arc::new(s.build().map_err(|e| format!("field `shape`: {e}"))?) as Arc<dyn BoundaryShape<2>>),
         None => None,
     };
     let move_only = spec.correspondence.is_some() || spec.centre.is_some() || spec.mode.is_some();

@@ -5,6 +5,7 @@ pub mod deform;
 pub mod driver;
 pub mod expr;
 pub mod geometry;
+pub mod hexquality;
 pub mod io;
 pub mod jacobian;
 pub mod lsfem;

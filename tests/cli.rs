@@ -183,7 +183,7 @@ fn unknown_side() {
 #[test]
 fn non_positive_jacobian() {
     let text = with_jacobian("type = \"expression\"\nf = \"x - 0.5\"\n");
-    run_bad_case(&text, &["not positive", "at (x, y) = ("]);
+    run_bad_case(&text, &["not positive", "at (x, y, z) = ("]);
 }
 
 #[test]

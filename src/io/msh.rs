@@ -1,15 +1,20 @@
-//! Gmsh MSH 4.1 ASCII files.
+//! Gmsh MSH 4.1 ASCII files, for quad meshes ([`QuadMesh`]) and hex meshes
+//! ([`HexMesh`]). Both use one layout, a dimension apart.
 //!
-//! Writing: every boundary part becomes a curve entity carrying a dimension-1
-//! physical group of the same name; all nodes and quads live on one surface
-//! entity carrying the dimension-2 physical group `"domain"`. Element tags
-//! run from 1: boundary edge `i` gets tag `i + 1`, cell `c` gets tag
-//! `edges.len() + c + 1`. Because the reader orders elements by tag, the
-//! edge order survives even though edges are grouped by curve in the file.
+//! Writing: every boundary part becomes an entity of the boundary dimension
+//! (a curve in 2D, a surface in 3D) carrying a physical group of that
+//! dimension with the part's name; all nodes and cells live on one entity of
+//! the mesh dimension (a surface of quads in 2D, a volume of hexes in 3D)
+//! carrying the physical group `"domain"`. Element tags run from 1: boundary
+//! element `i` (edge or face) gets tag `i + 1`, cell `c` gets tag
+//! `boundary.len() + c + 1`. Because the reader orders elements by tag, the
+//! boundary order survives even though it is grouped by part in the file.
 //!
-//! Reading: linear meshes only (2-node lines, 4-node quads; points are
-//! skipped). Lines are named by the physical group of their curve entity.
-//! The z coordinate is dropped.
+//! Reading: linear meshes only. [`parse_msh`] reads 2-node lines (named by
+//! the physical group of their curve) and 4-node quads (the cells) and drops
+//! z; [`parse_hex_msh`] reads 4-node quads (boundary faces, named by the
+//! physical group of their surface) and 8-node hexes (the cells), skipping
+//! lines. Points are skipped by both.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -19,9 +24,10 @@ use std::str::FromStr;
 use thiserror::Error;
 
 use super::{fmt_f64, write_atomic};
-use crate::mesh::{BoundaryEdge, Point2, QuadMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, Point3, QuadMesh};
 
-/// Name of the dimension-2 physical group that holds all cells.
+/// Name of the physical group that holds all cells (dimension 2 for quad
+/// meshes, 3 for hex meshes).
 pub const DOMAIN_NAME: &str = "domain";
 
 /// How to turn another MSH flavour into one this reader accepts.
@@ -85,14 +91,14 @@ pub enum MshError {
         /// Count found.
         found: u64,
     },
-    /// An element type other than 2-node line, 4-node quad or point.
-    #[error(
-        "line {line}: unsupported element type {element_type} (only linear meshes: \
-         1 = 2-node line, 3 = 4-node quad, 15 = point)"
-    )]
+    /// An element type the reader cannot store (e.g. a triangle, or a hex
+    /// in a quad mesh).
+    #[error("line {line}: unsupported element type {element_type} ({accepted})")]
     UnknownElementType {
         /// Line of the element block header.
         line: usize,
+        /// The element types this reader accepts, as a phrase.
+        accepted: &'static str,
         /// The MSH element type number.
         element_type: i64,
     },
@@ -139,129 +145,261 @@ pub enum MshError {
 /// The mesh is assumed valid; [`write_msh`] checks that first. Coordinates
 /// are printed with round-trip precision, so reading gives the same bits.
 pub fn msh_string(mesh: &QuadMesh) -> String {
-    let mut out = String::new();
-    out.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
-    push_physical_names(&mut out, mesh);
-    push_entities(&mut out, mesh);
-    push_nodes(&mut out, mesh);
-    push_elements(&mut out, mesh);
-    out
+    Layout::quad(mesh).to_msh()
 }
 
 /// Checks `mesh` and writes it atomically to `path` as MSH 4.1 ASCII.
 pub fn write_msh(path: &Path, mesh: &QuadMesh) -> Result<(), MshError> {
-    validate(mesh)?;
-    write_atomic(path, msh_string(mesh).as_bytes()).map_err(|source| MshError::Io {
-        path: path.to_owned(),
-        source,
-    })
+    Layout::quad(mesh).write(path)
 }
 
-/// Rejects what would make an unreadable or lossy file: non-finite
-/// coordinates, dangling indices, and part names that cannot be quoted or
-/// that repeat (the reader identifies parts by name).
-fn validate(mesh: &QuadMesh) -> Result<(), MshError> {
-    let bad = |msg: String| Err(MshError::InvalidMesh(msg));
-    let n = mesh.nodes.len();
-    if let Some(i) = mesh
-        .nodes
-        .iter()
-        .position(|p| !p.iter().all(|x| x.is_finite()))
-    {
-        return bad(format!(
-            "node {i} has a non-finite coordinate {:?}",
-            mesh.nodes[i]
-        ));
+/// The hex mesh as MSH 4.1 ASCII text: boundary faces as 4-node quads
+/// (type 3) on one surface per part, hexes (type 5) and all nodes on one
+/// volume carrying the dimension-3 group [`DOMAIN_NAME`] (layout in the
+/// module docs).
+///
+/// The mesh is assumed valid; [`write_hex_msh`] checks that first.
+/// Coordinates are printed with round-trip precision.
+pub fn hex_msh_string(mesh: &HexMesh) -> String {
+    Layout::hex(mesh).to_msh()
+}
+
+/// Checks `mesh` and writes it atomically to `path` as MSH 4.1 ASCII
+/// ([`hex_msh_string`]). Rejects non-finite coordinates, dangling node or
+/// part indices and part names that are empty, repeated or unquotable;
+/// nothing is written then.
+pub fn write_hex_msh(path: &Path, mesh: &HexMesh) -> Result<(), MshError> {
+    Layout::hex(mesh).write(path)
+}
+
+/// A quad or hex mesh as the writer sees it: the file layout is the same
+/// for both, with every dimension one higher in 3D.
+struct Layout<'a> {
+    /// Dimension of the cells: 2 (quads) or 3 (hexes).
+    dim: usize,
+    /// Node coordinates, z = 0 in 2D.
+    points: Vec<Point3>,
+    /// Boundary elements (edges or faces) as `(part, nodes)`.
+    boundary: Vec<(usize, &'a [usize])>,
+    /// Cells as node lists.
+    cells: Vec<&'a [usize]>,
+    /// Names of the boundary parts.
+    part_names: &'a [String],
+}
+
+impl<'a> Layout<'a> {
+    /// The layout of a quad mesh.
+    fn quad(mesh: &'a QuadMesh) -> Self {
+        Layout {
+            dim: 2,
+            points: mesh.nodes.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+            boundary: mesh.edges.iter().map(|e| (e.part, &e.nodes[..])).collect(),
+            cells: mesh.cells.iter().map(|c| &c[..]).collect(),
+            part_names: &mesh.part_names,
+        }
     }
-    if let Some(c) = mesh.cells.iter().position(|c| c.iter().any(|&v| v >= n)) {
-        return bad(format!("cell {c} refers to a node >= {n}"));
+
+    /// The layout of a hex mesh.
+    fn hex(mesh: &'a HexMesh) -> Self {
+        Layout {
+            dim: 3,
+            points: mesh.nodes.clone(),
+            boundary: mesh.faces.iter().map(|f| (f.part, &f.nodes[..])).collect(),
+            cells: mesh.cells.iter().map(|c| &c[..]).collect(),
+            part_names: &mesh.part_names,
+        }
     }
-    let k = mesh.part_names.len();
-    if let Some(e) = mesh
-        .edges
-        .iter()
-        .position(|e| e.part >= k || e.nodes.iter().any(|&v| v >= n))
-    {
-        return bad(format!(
-            "boundary edge {e} refers to a node >= {n} or a part >= {k}"
-        ));
+
+    /// MSH element type of the boundary elements: 2-node line or 4-node quad.
+    fn boundary_type(&self) -> u8 {
+        if self.dim == 2 {
+            1
+        } else {
+            3
+        }
     }
-    for (i, name) in mesh.part_names.iter().enumerate() {
-        if name.is_empty() || name.contains(['"', '\n', '\r']) {
+
+    /// MSH element type of the cells: 4-node quad or 8-node hexahedron.
+    fn cell_type(&self) -> u8 {
+        if self.dim == 2 {
+            3
+        } else {
+            5
+        }
+    }
+
+    /// What a boundary element is called in error messages.
+    fn boundary_word(&self) -> &'static str {
+        if self.dim == 2 {
+            "boundary edge"
+        } else {
+            "boundary face"
+        }
+    }
+
+    /// The whole file as text.
+    fn to_msh(&self) -> String {
+        let mut out = String::new();
+        out.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+        self.push_physical_names(&mut out);
+        self.push_entities(&mut out);
+        self.push_nodes(&mut out);
+        self.push_elements(&mut out);
+        out
+    }
+
+    /// Validates, then writes the text atomically.
+    fn write(&self, path: &Path) -> Result<(), MshError> {
+        self.validate()?;
+        write_atomic(path, self.to_msh().as_bytes()).map_err(|source| MshError::Io {
+            path: path.to_owned(),
+            source,
+        })
+    }
+
+    /// Rejects what would make an unreadable or lossy file: non-finite
+    /// coordinates, dangling indices, and part names that cannot be quoted
+    /// or that repeat (the reader identifies parts by name).
+    fn validate(&self) -> Result<(), MshError> {
+        let bad = |msg: String| Err(MshError::InvalidMesh(msg));
+        let n = self.points.len();
+        if let Some(i) = self
+            .points
+            .iter()
+            .position(|p| !p.iter().all(|x| x.is_finite()))
+        {
+            // Only the mesh's own coordinates: a 2D node shows as [x, y].
             return bad(format!(
-                "part name {name:?} is empty or contains a quote or line break"
+                "node {i} has a non-finite coordinate {:?}",
+                &self.points[i][..self.dim]
             ));
         }
-        if mesh.part_names[..i].contains(name) {
-            return bad(format!("part name {name:?} appears twice"));
+        if let Some(c) = self.cells.iter().position(|c| c.iter().any(|&v| v >= n)) {
+            return bad(format!("cell {c} refers to a node >= {n}"));
+        }
+        let k = self.part_names.len();
+        if let Some(e) = self
+            .boundary
+            .iter()
+            .position(|(part, nodes)| *part >= k || nodes.iter().any(|&v| v >= n))
+        {
+            return bad(format!(
+                "{} {e} refers to a node >= {n} or a part >= {k}",
+                self.boundary_word()
+            ));
+        }
+        check_part_names(self.part_names)
+    }
+
+    /// Groups 1..k of the boundary dimension named after the parts, then
+    /// the "domain" group of the mesh dimension.
+    fn push_physical_names(&self, out: &mut String) {
+        let (k, d) = (self.part_names.len(), self.dim);
+        put!(out, "$PhysicalNames\n{}", k + 1);
+        for (i, name) in self.part_names.iter().enumerate() {
+            put!(out, "{} {} \"{name}\"", d - 1, i + 1);
+        }
+        put!(out, "{d} {} \"{DOMAIN_NAME}\"\n$EndPhysicalNames", k + 1);
+    }
+
+    /// Entity `i + 1` of the boundary dimension per part (physical tag
+    /// `i + 1`, no bounding entities) and one entity of the mesh dimension
+    /// bounded by all of them (physical tag `k + 1`).
+    fn push_entities(&self, out: &mut String) {
+        let k = self.part_names.len();
+        let mut counts = [0; 4];
+        counts[self.dim - 1] = k;
+        counts[self.dim] = 1;
+        let [c0, c1, c2, c3] = counts;
+        put!(out, "$Entities\n{c0} {c1} {c2} {c3}");
+        let mut part_nodes: Vec<Vec<usize>> = vec![Vec::new(); k];
+        for &(part, nodes) in &self.boundary {
+            part_nodes[part].extend_from_slice(nodes);
+        }
+        for (part, nodes) in part_nodes.iter().enumerate() {
+            let bbox = self.bounding_box(nodes.iter().copied());
+            put!(out, "{} {bbox} 1 {} 0", part + 1, part + 1);
+        }
+        let bounding: String = (1..=k).map(|t| format!(" {t}")).collect();
+        let bbox = self.bounding_box(0..self.points.len());
+        put!(out, "1 {bbox} 1 {} {k}{bounding}", k + 1);
+        out.push_str("$EndEntities\n");
+    }
+
+    /// `minX minY minZ maxX maxY maxZ` of the given nodes (zeros if none).
+    fn bounding_box(&self, nodes: impl Iterator<Item = usize>) -> String {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in nodes.filter_map(|n| self.points.get(n)) {
+            for d in 0..3 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        if lo[0] > hi[0] {
+            return "0 0 0 0 0 0".to_string();
+        }
+        let [a, b, c, d, e, f] = [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(fmt_f64);
+        format!("{a} {b} {c} {d} {e} {f}")
+    }
+
+    /// All nodes in one non-parametric block on the domain entity, tags 1..N.
+    fn push_nodes(&self, out: &mut String) {
+        let n = self.points.len();
+        let (lo, hi) = tag_range(n, 1);
+        put!(out, "$Nodes\n1 {n} {lo} {hi}\n{} 1 0 {n}", self.dim);
+        for tag in 1..=n {
+            put!(out, "{tag}");
+        }
+        for p in &self.points {
+            put!(out, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]));
+        }
+        out.push_str("$EndNodes\n");
+    }
+
+    /// One block per non-empty part, then the cell block.
+    fn push_elements(&self, out: &mut String) {
+        let mut per_part: Vec<Vec<usize>> = vec![Vec::new(); self.part_names.len()];
+        for (e, &(part, _)) in self.boundary.iter().enumerate() {
+            per_part[part].push(e);
+        }
+        let blocks =
+            per_part.iter().filter(|b| !b.is_empty()).count() + usize::from(!self.cells.is_empty());
+        let total = self.boundary.len() + self.cells.len();
+        let (lo, hi) = tag_range(total, 1);
+        put!(out, "$Elements\n{blocks} {total} {lo} {hi}");
+        for (part, elements) in per_part.iter().enumerate().filter(|(_, b)| !b.is_empty()) {
+            let header = (self.dim - 1, part + 1, self.boundary_type());
+            push_element_block(
+                out,
+                header,
+                elements.iter().map(|&e| (e + 1, self.boundary[e].1)),
+            );
+        }
+        if !self.cells.is_empty() {
+            let first = self.boundary.len() + 1;
+            let cells = self.cells.iter().enumerate().map(|(c, &v)| (first + c, v));
+            push_element_block(out, (self.dim, 1, self.cell_type()), cells);
+        }
+        out.push_str("$EndElements\n");
+    }
+}
+
+/// Part names must be quotable on one line and distinct.
+fn check_part_names(names: &[String]) -> Result<(), MshError> {
+    for (i, name) in names.iter().enumerate() {
+        if name.is_empty() || name.contains(['"', '\n', '\r']) {
+            return Err(MshError::InvalidMesh(format!(
+                "part name {name:?} is empty or contains a quote or line break"
+            )));
+        }
+        if names[..i].contains(name) {
+            return Err(MshError::InvalidMesh(format!(
+                "part name {name:?} appears twice"
+            )));
         }
     }
     Ok(())
-}
-
-/// Dimension-1 groups 1..k named after the parts, then the "domain" group.
-fn push_physical_names(out: &mut String, mesh: &QuadMesh) {
-    let k = mesh.part_names.len();
-    put!(out, "$PhysicalNames\n{}", k + 1);
-    for (i, name) in mesh.part_names.iter().enumerate() {
-        put!(out, "1 {} \"{name}\"", i + 1);
-    }
-    put!(out, "2 {} \"{DOMAIN_NAME}\"\n$EndPhysicalNames", k + 1);
-}
-
-/// Curve `i + 1` per part (physical tag `i + 1`, no bounding points) and one
-/// surface bounded by all curves (physical tag `k + 1`).
-fn push_entities(out: &mut String, mesh: &QuadMesh) {
-    let k = mesh.part_names.len();
-    put!(out, "$Entities\n0 {k} 1 0");
-    for part in 0..k {
-        let nodes = mesh
-            .edges
-            .iter()
-            .filter(|e| e.part == part)
-            .flat_map(|e| e.nodes);
-        let bbox = bounding_box(mesh, nodes);
-        put!(out, "{} {bbox} 1 {} 0", part + 1, part + 1);
-    }
-    let curves: String = (1..=k).map(|t| format!(" {t}")).collect();
-    put!(
-        out,
-        "1 {} 1 {} {k}{curves}",
-        bounding_box(mesh, 0..mesh.nodes.len()),
-        k + 1
-    );
-    out.push_str("$EndEntities\n");
-}
-
-/// `minX minY minZ maxX maxY maxZ` of the given nodes (zeros if none).
-fn bounding_box(mesh: &QuadMesh, nodes: impl Iterator<Item = usize>) -> String {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for p in nodes.filter_map(|n| mesh.nodes.get(n)) {
-        for d in 0..2 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
-    if lo[0] > hi[0] {
-        return "0 0 0 0 0 0".to_string();
-    }
-    let f = fmt_f64;
-    format!("{} {} 0 {} {} 0", f(lo[0]), f(lo[1]), f(hi[0]), f(hi[1]))
-}
-
-/// All nodes in one non-parametric block on surface 1, tags 1..N.
-fn push_nodes(out: &mut String, mesh: &QuadMesh) {
-    let n = mesh.nodes.len();
-    let (lo, hi) = tag_range(n, 1);
-    put!(out, "$Nodes\n1 {n} {lo} {hi}\n2 1 0 {n}");
-    for tag in 1..=n {
-        put!(out, "{tag}");
-    }
-    for p in &mesh.nodes {
-        put!(out, "{} {} 0", fmt_f64(p[0]), fmt_f64(p[1]));
-    }
-    out.push_str("$EndNodes\n");
 }
 
 /// `(min, max)` of `count` consecutive tags starting at `first`; Gmsh
@@ -274,57 +412,28 @@ fn tag_range(count: usize, first: usize) -> (usize, usize) {
     }
 }
 
-/// One line block per non-empty part, then the quad block.
-fn push_elements(out: &mut String, mesh: &QuadMesh) {
-    let k = mesh.part_names.len();
-    let per_part: Vec<Vec<usize>> = (0..k)
-        .map(|p| {
-            (0..mesh.edges.len())
-                .filter(|&e| mesh.edges[e].part == p)
-                .collect()
-        })
-        .collect();
-    let blocks =
-        per_part.iter().filter(|b| !b.is_empty()).count() + usize::from(!mesh.cells.is_empty());
-    let total = mesh.edges.len() + mesh.cells.len();
-    let (lo, hi) = tag_range(total, 1);
-    put!(out, "$Elements\n{blocks} {total} {lo} {hi}");
-    for (part, edges) in per_part.iter().enumerate().filter(|(_, b)| !b.is_empty()) {
-        put!(out, "1 {} 1 {}", part + 1, edges.len());
-        for &e in edges {
-            let [a, b] = mesh.edges[e].nodes;
-            put!(out, "{} {} {}", e + 1, a + 1, b + 1);
+/// An element block: header `dim entity type count`, then one line
+/// `tag node+1 ...` per element (MSH node tags start at 1).
+fn push_element_block<'e>(
+    out: &mut String,
+    (dim, entity, element_type): (usize, usize, u8),
+    elements: impl ExactSizeIterator<Item = (usize, &'e [usize])>,
+) {
+    put!(out, "{dim} {entity} {element_type} {}", elements.len());
+    for (tag, nodes) in elements {
+        let _ = write!(out, "{tag}");
+        for v in nodes {
+            let _ = write!(out, " {}", v + 1);
         }
+        out.push('\n');
     }
-    if !mesh.cells.is_empty() {
-        put!(out, "2 1 3 {}", mesh.cells.len());
-        let first = mesh.edges.len() + 1;
-        for (c, v) in mesh.cells.iter().enumerate() {
-            put!(
-                out,
-                "{} {} {} {} {}",
-                first + c,
-                v[0] + 1,
-                v[1] + 1,
-                v[2] + 1,
-                v[3] + 1
-            );
-        }
-    }
-    out.push_str("$EndElements\n");
 }
 
 // ---------------------------------------------------------------- reading
 
 /// Reads an ASCII MSH 4.1 file (see [`parse_msh`]).
 pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
-    let bytes = std::fs::read(path).map_err(|source| MshError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    // A binary file is not UTF-8; the lossy text still has a readable
-    // header, so the reader can say "binary" instead of failing obscurely.
-    parse_msh(&String::from_utf8_lossy(&bytes))
+    parse_msh(&read_text(path)?)
 }
 
 /// Parses ASCII MSH 4.1 text into a mesh.
@@ -337,9 +446,64 @@ pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
 /// `$MeshFormat`, `$PhysicalNames`, `$Entities`, `$Nodes` and `$Elements`
 /// are skipped.
 pub fn parse_msh(text: &str) -> Result<QuadMesh, MshError> {
+    parse_raw(text, QUAD_TYPES)?.into_quad_mesh()
+}
+
+/// Reads an ASCII MSH 4.1 hex mesh file (see [`parse_hex_msh`]).
+pub fn read_hex_msh(path: &Path) -> Result<HexMesh, MshError> {
+    parse_hex_msh(&read_text(path)?)
+}
+
+/// Parses ASCII MSH 4.1 text into a hex mesh.
+///
+/// Nodes keep file order and are renumbered from 0; cells (8-node hexes)
+/// and boundary faces (4-node quads) are ordered by element tag and keep
+/// the node order of the file. Boundary parts are the dimension-2 physical
+/// names in order of physical tag, followed by `surface<tag>` for quads on
+/// surfaces without a named dimension-2 group. Lines and points are
+/// skipped; any other element type (e.g. triangles, prisms) is an error.
+/// Errors are those of [`parse_msh`].
+pub fn parse_hex_msh(text: &str) -> Result<HexMesh, MshError> {
+    parse_raw(text, HEX_TYPES)?.into_hex_mesh()
+}
+
+/// The file as text, for either parser.
+fn read_text(path: &Path) -> Result<String, MshError> {
+    let bytes = std::fs::read(path).map_err(|source| MshError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    // A binary file is not UTF-8; the lossy text still has a readable
+    // header, so the reader can say "binary" instead of failing obscurely.
+    Ok(String::from_utf8_lossy(&bytes).into_owned())
+}
+
+/// The element types one reader stores; others are an error.
+struct ElementTypes {
+    /// Accepted MSH type numbers.
+    types: &'static [i64],
+    /// The list for error messages.
+    phrase: &'static str,
+}
+
+/// What [`parse_msh`] accepts.
+const QUAD_TYPES: ElementTypes = ElementTypes {
+    types: &[1, 3, 15],
+    phrase: "only linear meshes: 1 = 2-node line, 3 = 4-node quad, 15 = point",
+};
+
+/// What [`parse_hex_msh`] accepts.
+const HEX_TYPES: ElementTypes = ElementTypes {
+    types: &[1, 3, 5, 15],
+    phrase: "only linear meshes: 1 = 2-node line, 3 = 4-node quad, \
+             5 = 8-node hexahedron, 15 = point",
+};
+
+/// Reads all sections of `text` into a [`RawMesh`].
+fn parse_raw(text: &str, accepted: ElementTypes) -> Result<RawMesh, MshError> {
     let mut cur = Cursor::new(text);
     read_mesh_format(&mut cur)?;
-    let mut raw = RawMesh::default();
+    let mut raw = RawMesh::new(accepted);
     while let Some((token, line)) = cur.next_token() {
         match token {
             "$PhysicalNames" => read_physical_names(&mut cur, &mut raw)?,
@@ -350,39 +514,65 @@ pub fn parse_msh(text: &str) -> Result<QuadMesh, MshError> {
             s => return Err(syntax(line, "a section header like `$Nodes`", s)),
         }
     }
-    raw.into_mesh()
+    raw.check_complete()?;
+    Ok(raw)
 }
 
 /// What the sections say, before parts are resolved.
-#[derive(Default)]
 struct RawMesh {
+    /// Element types to store.
+    accepted: ElementTypes,
     /// `(dim, physical tag, name)` from `$PhysicalNames`.
     physical_names: Vec<(i64, i64, String)>,
-    /// Physical tags of each curve entity.
-    curve_physicals: HashMap<i64, Vec<i64>>,
+    /// Physical tags of each `(dimension, tag)` entity.
+    entity_physicals: HashMap<(usize, i64), Vec<i64>>,
     /// Node tag → index into `nodes`.
     node_index: HashMap<u64, usize>,
-    nodes: Vec<Point2>,
+    nodes: Vec<Point3>,
     /// `(element tag, curve tag, nodes)` of 2-node lines.
     lines: Vec<(u64, i64, [usize; 2])>,
-    /// `(element tag, nodes)` of quads.
-    quads: Vec<(u64, [usize; 4])>,
+    /// `(element tag, surface tag, nodes)` of 4-node quads.
+    quads: Vec<(u64, i64, [usize; 4])>,
+    /// `(element tag, nodes)` of 8-node hexes.
+    hexes: Vec<(u64, [usize; 8])>,
     has_nodes: bool,
     has_elements: bool,
 }
 
 impl RawMesh {
-    /// Orders elements by tag and names the boundary parts.
-    fn into_mesh(mut self) -> Result<QuadMesh, MshError> {
+    /// An empty mesh that will store the `accepted` element types.
+    fn new(accepted: ElementTypes) -> Self {
+        RawMesh {
+            accepted,
+            physical_names: Vec::new(),
+            entity_physicals: HashMap::new(),
+            node_index: HashMap::new(),
+            nodes: Vec::new(),
+            lines: Vec::new(),
+            quads: Vec::new(),
+            hexes: Vec::new(),
+            has_nodes: false,
+            has_elements: false,
+        }
+    }
+
+    /// Fails if `$Nodes` or `$Elements` never came.
+    fn check_complete(&self) -> Result<(), MshError> {
         if !self.has_nodes {
             return Err(MshError::MissingSection("Nodes"));
         }
         if !self.has_elements {
             return Err(MshError::MissingSection("Elements"));
         }
+        Ok(())
+    }
+
+    /// Lines become named boundary edges, quads cells; z is dropped.
+    fn into_quad_mesh(mut self) -> Result<QuadMesh, MshError> {
         self.lines.sort_by_key(|l| l.0);
         self.quads.sort_by_key(|q| q.0);
-        let (part_names, curve_part) = self.resolve_parts();
+        let curves = self.lines.iter().map(|l| l.1);
+        let (part_names, curve_part) = self.resolve_parts(1, curves, "curve");
         let edges = self
             .lines
             .iter()
@@ -392,17 +582,49 @@ impl RawMesh {
             })
             .collect();
         Ok(QuadMesh {
-            nodes: self.nodes,
-            cells: self.quads.into_iter().map(|q| q.1).collect(),
+            nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
+            cells: self.quads.into_iter().map(|q| q.2).collect(),
             edges,
             part_names,
         })
     }
 
-    /// Part names and the part of every curve that carries lines.
-    fn resolve_parts(&self) -> (Vec<String>, HashMap<i64, usize>) {
-        let mut named: Vec<&(i64, i64, String)> =
-            self.physical_names.iter().filter(|p| p.0 == 1).collect();
+    /// Quads become named boundary faces, hexes cells; lines are dropped.
+    fn into_hex_mesh(mut self) -> Result<HexMesh, MshError> {
+        self.quads.sort_by_key(|q| q.0);
+        self.hexes.sort_by_key(|h| h.0);
+        let surfaces = self.quads.iter().map(|q| q.1);
+        let (part_names, surface_part) = self.resolve_parts(2, surfaces, "surface");
+        let faces = self
+            .quads
+            .iter()
+            .map(|&(_, surface, nodes)| BoundaryFace {
+                nodes,
+                part: surface_part[&surface],
+            })
+            .collect();
+        Ok(HexMesh {
+            nodes: self.nodes,
+            cells: self.hexes.into_iter().map(|h| h.1).collect(),
+            faces,
+            part_names,
+        })
+    }
+
+    /// Part names and the part of every entity in `entities` (of dimension
+    /// `dim`, the boundary dimension): the named physical groups of that
+    /// dimension by tag, then `<prefix><tag>` for entities in none of them.
+    fn resolve_parts(
+        &self,
+        dim: usize,
+        entities: impl Iterator<Item = i64>,
+        prefix: &str,
+    ) -> (Vec<String>, HashMap<i64, usize>) {
+        let mut named: Vec<&(i64, i64, String)> = self
+            .physical_names
+            .iter()
+            .filter(|p| p.0 == dim as i64)
+            .collect();
         named.sort_by_key(|p| p.1);
         let mut names: Vec<String> = Vec::new();
         let mut tag_part: HashMap<i64, usize> = HashMap::new();
@@ -413,26 +635,26 @@ impl RawMesh {
             });
             tag_part.insert(*tag, part);
         }
-        let mut curve_part = HashMap::new();
-        for &(_, curve, _) in &self.lines {
-            if curve_part.contains_key(&curve) {
+        let mut entity_part = HashMap::new();
+        for entity in entities {
+            if entity_part.contains_key(&entity) {
                 continue;
             }
             let physicals = self
-                .curve_physicals
-                .get(&curve)
+                .entity_physicals
+                .get(&(dim, entity))
                 .map(Vec::as_slice)
                 .unwrap_or(&[]);
             let part = match physicals.iter().find_map(|t| tag_part.get(t)) {
                 Some(&p) => p,
                 None => {
-                    names.push(format!("curve{curve}"));
+                    names.push(format!("{prefix}{entity}"));
                     names.len() - 1
                 }
             };
-            curve_part.insert(curve, part);
+            entity_part.insert(entity, part);
         }
-        (names, curve_part)
+        (names, entity_part)
     }
 }
 
@@ -469,7 +691,7 @@ fn read_physical_names(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshErr
 }
 
 /// `$Entities`: counts of points, curves, surfaces, volumes, then one line
-/// per entity. Only the physical tags of curves are kept.
+/// per entity. The physical tags of every entity are kept.
 fn read_entities(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
     let mut counts = [0u64; 4];
     for (dim, c) in counts.iter_mut().enumerate() {
@@ -480,9 +702,7 @@ fn read_entities(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> {
     for (dim, &count) in counts.iter().enumerate() {
         for _ in 0..count {
             let (tag, physicals) = read_entity(cur, dim)?;
-            if dim == 1 {
-                raw.curve_physicals.insert(tag, physicals);
-            }
+            raw.entity_physicals.insert((dim, tag), physicals);
         }
     }
     cur.expect("$EndEntities")
@@ -579,7 +799,7 @@ fn read_node_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> 
 /// `x y z` of node `tag` plus `extra` parametric values; rejects NaN/inf.
 /// Expected-item messages in per-value loops are static strings: formatting
 /// one per token would dominate the time on large files.
-fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<Point2, MshError> {
+fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<Point3, MshError> {
     let mut xyz = [0.0f64; 3];
     for x in &mut xyz {
         let (text, line) = cur.token("a node coordinate")?;
@@ -597,7 +817,7 @@ fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<Point2, Ms
     for _ in 0..extra {
         cur.parse::<f64>("a parametric node coordinate")?;
     }
-    Ok([xyz[0], xyz[1]])
+    Ok(xyz)
 }
 
 /// `$Elements`: header `numBlocks numElements minTag maxTag`, then blocks.
@@ -635,13 +855,21 @@ fn read_element_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<u64, MshErr
     let nodes_per_element = match element_type {
         1 => 2,
         3 => 4,
+        5 => 8,
         15 => 1,
-        _ => return Err(MshError::UnknownElementType { line, element_type }),
+        _ => 0,
     };
+    if nodes_per_element == 0 || !raw.accepted.types.contains(&element_type) {
+        return Err(MshError::UnknownElementType {
+            line,
+            accepted: raw.accepted.phrase,
+            element_type,
+        });
+    }
     let count: u64 = cur.parse("the number of elements in the block")?.0;
     for _ in 0..count {
         let (tag, line) = cur.parse::<u64>("an element tag")?;
-        let mut nodes = [0usize; 4];
+        let mut nodes = [0usize; 8];
         for v in nodes.iter_mut().take(nodes_per_element) {
             let node: u64 = cur.parse("a node tag of an element")?.0;
             *v = *raw.node_index.get(&node).ok_or(MshError::UnknownNode {
@@ -650,9 +878,11 @@ fn read_element_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<u64, MshErr
                 tag: node,
             })?;
         }
+        let [a, b, c, d, ..] = nodes;
         match element_type {
-            1 => raw.lines.push((tag, entity, [nodes[0], nodes[1]])),
-            3 => raw.quads.push((tag, nodes)),
+            1 => raw.lines.push((tag, entity, [a, b])),
+            3 => raw.quads.push((tag, entity, [a, b, c, d])),
+            5 => raw.hexes.push((tag, nodes)),
             _ => {} // points carry no information the mesh keeps
         }
     }
@@ -1054,5 +1284,156 @@ mod tests {
         assert_rejected("\"left\"", "\"left", &["closing quote"]);
         assert_rejected("$EndNodes", "$EndNode", &["expected $EndNodes"]);
         assert_rejected("$Elements", "Elements", &["section header"]);
+    }
+
+    // ------------------------------------------------------------ hex meshes
+
+    /// A 3×2×2 brick moved by a smooth non-affine map, with coordinates
+    /// that stress round-trip printing.
+    fn perturbed_brick() -> HexMesh {
+        let mut m = HexMesh::structured_box([0.0; 3], [1.5, 1.0, 1.0], [3, 2, 2]);
+        for p in &mut m.nodes {
+            let [x, y, z] = *p;
+            *p = [
+                x + 0.04 * (2.0 * y).sin() * z,
+                y + 0.03 * (3.0 * z).cos() * x + 1e-17 * x,
+                z + 0.05 * x * y,
+            ];
+        }
+        m.nodes[0] = [-0.0, 5e-324, 1e300];
+        m
+    }
+
+    #[test]
+    fn hex_round_trip_is_identical() {
+        let m = perturbed_brick();
+        let back = parse_hex_msh(&hex_msh_string(&m)).unwrap();
+        assert_eq!(back, m);
+        for (a, b) in back.nodes.iter().zip(&m.nodes) {
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        }
+    }
+
+    #[test]
+    fn hex_file_round_trip_and_layout() {
+        let m = perturbed_brick();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("brick.msh");
+        write_hex_msh(&path, &m).unwrap();
+        assert_eq!(read_hex_msh(&path).unwrap(), m);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with(
+            "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n7\n2 1 \"xmin\"\n"
+        ));
+        assert!(text.contains("3 7 \"domain\"\n$EndPhysicalNames\n$Entities\n0 0 6 1\n"));
+        // the volume is bounded by the six surfaces
+        assert!(text.contains(" 1 7 6 1 2 3 4 5 6\n$EndEntities\n"));
+        assert!(text.contains("$Nodes\n1 36 1 36\n3 1 0 36\n1\n"));
+        // 2·(2·2 + 3·2 + 3·2) = 32 faces in 6 blocks, 12 hexes: tags 1..44
+        assert!(text.contains("$Elements\n7 44 1 44\n2 1 3 4\n1 "));
+        assert!(text.contains("\n3 1 5 12\n33 1 2 6 5 13 14 18 17\n"));
+        // the 2D reader refuses the hexes, naming what it accepts
+        let msg = parse_msh(&text).unwrap_err().to_string();
+        assert!(
+            msg.contains("element type 5 (only linear meshes: 1 = 2-node line"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn hex_write_rejects_invalid_meshes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.msh");
+        let mut m = perturbed_brick();
+        m.nodes[5][2] = f64::INFINITY;
+        let msg = write_hex_msh(&path, &m).unwrap_err().to_string();
+        assert!(msg.contains("node 5") && msg.contains("inf"), "{msg}");
+        let mut m = perturbed_brick();
+        m.faces[3].part = 6;
+        let msg = write_hex_msh(&path, &m).unwrap_err().to_string();
+        assert!(msg.contains("boundary face 3"), "{msg}");
+        let mut m = perturbed_brick();
+        m.cells[2][7] = 36;
+        let msg = write_hex_msh(&path, &m).unwrap_err().to_string();
+        assert!(msg.contains("cell 2 refers to a node >= 36"), "{msg}");
+        let mut m = perturbed_brick();
+        m.part_names[4] = "xmax".into();
+        assert!(write_hex_msh(&path, &m)
+            .unwrap_err()
+            .to_string()
+            .contains("twice"));
+        m.part_names[4] = "a\"b".into();
+        assert!(matches!(
+            write_hex_msh(&path, &m),
+            Err(MshError::InvalidMesh(_))
+        ));
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn hex_reader_names_unnamed_surfaces_and_skips_lines() {
+        // one hex; a named surface (physical 4 "wall") with one face, an
+        // unnamed surface 9 with one face, a line block and a point block
+        let text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\
+            $PhysicalNames\n2\n2 4 \"wall\"\n3 1 \"solid\"\n$EndPhysicalNames\n\
+            $Entities\n0 1 2 1\n5 0 0 0 1 0 0 0 0\n\
+            3 0 0 0 1 1 0 1 4 0\n9 0 0 1 1 1 1 0 0\n\
+            1 0 0 0 1 1 1 1 1 2 3 9\n$EndEntities\n\
+            $Nodes\n1 8 11 18\n3 1 0 8\n11\n12\n13\n14\n15\n16\n17\n18\n\
+            0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n$EndNodes\n\
+            $Elements\n5 5 1 20\n0 1 15 1\n20 11\n1 5 1 1\n19 11 12\n\
+            3 1 5 1\n3 11 12 13 14 15 16 17 18\n\
+            2 9 3 1\n2 15 16 17 18\n2 3 3 1\n7 11 14 13 12\n$EndElements\n";
+        let m = parse_hex_msh(text).unwrap();
+        assert_eq!(m.cells, vec![[0, 1, 2, 3, 4, 5, 6, 7]]);
+        assert_eq!(m.nodes[6], [1.0, 1.0, 1.0]);
+        assert_eq!(
+            m.part_names,
+            vec!["wall".to_string(), "surface9".to_string()]
+        );
+        // ordered by element tag: 2 (surface 9) before 7 (surface 3)
+        assert_eq!(
+            m.faces,
+            vec![
+                BoundaryFace {
+                    nodes: [4, 5, 6, 7],
+                    part: 1
+                },
+                BoundaryFace {
+                    nodes: [0, 3, 2, 1],
+                    part: 0
+                }
+            ]
+        );
+    }
+
+    #[test]
+    fn hex_reader_errors() {
+        let text = hex_msh_string(&HexMesh::structured_box([0.0; 3], [1.0; 3], [1, 1, 1]));
+        // triangles cannot be stored
+        let bad = text.replacen("\n2 1 3 1\n", "\n2 1 2 1\n", 1);
+        let line = bad.lines().position(|l| l == "2 1 2 1").unwrap() + 1;
+        let msg = parse_hex_msh(&bad).unwrap_err().to_string();
+        assert_eq!(
+            msg,
+            format!(
+                "line {line}: unsupported element type 2 (only linear meshes: 1 = 2-node \
+                 line, 3 = 4-node quad, 5 = 8-node hexahedron, 15 = point)"
+            )
+        );
+        // a hex naming a node that does not exist
+        let bad = text.replacen("\n7 1 2 4 3 5 6 8 7\n", "\n7 1 2 4 3 5 6 8 70\n", 1);
+        let msg = parse_hex_msh(&bad).unwrap_err().to_string();
+        assert!(
+            msg.ends_with("element 7 refers to unknown node tag 70"),
+            "{msg}"
+        );
+        // every prefix fails cleanly
+        for end in 0..text.len() - 1 {
+            assert!(
+                parse_hex_msh(&text[..end]).is_err(),
+                "prefix {end} accepted"
+            );
+        }
     }
 }

@@ -1,5 +1,5 @@
-//! VTK XML unstructured grids (`.vtu`, ASCII), for viewing meshes and
-//! per-cell or per-node fields in ParaView.
+//! VTK XML unstructured grids (`.vtu`, ASCII), for viewing quad and hex
+//! meshes and per-cell or per-node fields in ParaView.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -7,10 +7,13 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use super::{fmt_f64, write_atomic};
-use crate::mesh::QuadMesh;
+use crate::mesh::{HexMesh, QuadMesh};
 
 /// VTK's cell type number for a linear quadrilateral.
 pub const VTK_QUAD: u8 = 9;
+
+/// VTK's cell type number for a linear (8-node) hexahedron.
+pub const VTK_HEXAHEDRON: u8 = 12;
 
 /// Errors of writing VTU files.
 #[derive(Debug, Error)]
@@ -64,25 +67,12 @@ pub fn vtu_string(
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 2]])],
 ) -> Result<String, VtuError> {
-    validate(mesh, cell_data, point_vectors)?;
-    let mut out = String::new();
-    out.push_str("<?xml version=\"1.0\"?>\n");
-    out.push_str(
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n",
-    );
-    out.push_str("<UnstructuredGrid>\n");
-    put!(
-        out,
-        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        mesh.num_nodes(),
-        mesh.num_cells()
-    );
-    push_point_data(&mut out, point_vectors);
-    push_cell_data(&mut out, cell_data);
-    push_points(&mut out, mesh);
-    push_cells(&mut out, mesh);
-    out.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-    Ok(out)
+    let grid = Grid {
+        points: &mesh.nodes,
+        cells: &mesh.cells,
+        cell_type: VTK_QUAD,
+    };
+    grid.to_vtu(cell_data, point_vectors)
 }
 
 /// Writes [`vtu_string`] atomically to `path`.
@@ -92,45 +82,161 @@ pub fn write_vtu(
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 2]])],
 ) -> Result<(), VtuError> {
-    let text = vtu_string(mesh, cell_data, point_vectors)?;
+    write_text(path, &vtu_string(mesh, cell_data, point_vectors)?)
+}
+
+/// The hex mesh as a VTK XML UnstructuredGrid (version 1.0, ASCII), laid
+/// out as in [`vtu_string`] but with 3D points, cells of type
+/// [`VTK_HEXAHEDRON`] (whose node order is [`HexMesh`]'s) and 3-component
+/// point vectors written as given. Rejects the same inputs.
+pub fn hex_vtu_string(
+    mesh: &HexMesh,
+    cell_data: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; 3]])],
+) -> Result<String, VtuError> {
+    let grid = Grid {
+        points: &mesh.nodes,
+        cells: &mesh.cells,
+        cell_type: VTK_HEXAHEDRON,
+    };
+    grid.to_vtu(cell_data, point_vectors)
+}
+
+/// Writes [`hex_vtu_string`] atomically to `path`; nothing is written if
+/// the input is rejected.
+pub fn write_hex_vtu(
+    path: &Path,
+    mesh: &HexMesh,
+    cell_data: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; 3]])],
+) -> Result<(), VtuError> {
+    write_text(path, &hex_vtu_string(mesh, cell_data, point_vectors)?)
+}
+
+/// Writes `text` atomically, naming `path` in the error.
+fn write_text(path: &Path, text: &str) -> Result<(), VtuError> {
     write_atomic(path, text.as_bytes()).map_err(|source| VtuError::Io {
         path: path.to_owned(),
         source,
     })
 }
 
-/// Everything [`vtu_string`] promises to reject.
-fn validate(
-    mesh: &QuadMesh,
-    cell_data: &[(&str, &[f64])],
-    point_vectors: &[(&str, &[[f64; 2]])],
-) -> Result<(), VtuError> {
-    check_finite("point coordinates", mesh.nodes.iter().flatten().copied(), 2)?;
-    let n = mesh.num_nodes();
-    if let Some(c) = mesh.cells.iter().position(|c| c.iter().any(|&v| v >= n)) {
-        return Err(VtuError::Invalid(format!(
-            "cell {c} refers to a node >= {n}"
-        )));
+/// An unstructured grid of one cell type: points with `D` coordinates
+/// (z = 0 when `D` = 2) and cells of `V` nodes. Quad and hex meshes share
+/// all the writing code through it.
+struct Grid<'a, const D: usize, const V: usize> {
+    points: &'a [[f64; D]],
+    cells: &'a [[usize; V]],
+    /// VTK cell type of every cell.
+    cell_type: u8,
+}
+
+impl<const D: usize, const V: usize> Grid<'_, D, V> {
+    /// The whole file, after [`Grid::validate`].
+    fn to_vtu(
+        &self,
+        cell_data: &[(&str, &[f64])],
+        point_vectors: &[(&str, &[[f64; D]])],
+    ) -> Result<String, VtuError> {
+        self.validate(cell_data, point_vectors)?;
+        let mut out = String::new();
+        out.push_str("<?xml version=\"1.0\"?>\n");
+        out.push_str(
+            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n",
+        );
+        out.push_str("<UnstructuredGrid>\n");
+        put!(
+            out,
+            "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+            self.points.len(),
+            self.cells.len()
+        );
+        push_point_data(&mut out, point_vectors);
+        push_cell_data(&mut out, cell_data);
+        self.push_points(&mut out);
+        self.push_cells(&mut out);
+        out.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+        Ok(out)
     }
-    check_names(cell_data.iter().map(|a| a.0))?;
-    check_names(point_vectors.iter().map(|a| a.0))?;
-    for (name, values) in cell_data {
-        check_length(
-            &format!("cell array {name:?}"),
-            mesh.num_cells(),
-            values.len(),
-        )?;
-        check_finite(&format!("cell array {name:?}"), values.iter().copied(), 1)?;
-    }
-    for (name, values) in point_vectors {
-        check_length(&format!("point array {name:?}"), n, values.len())?;
+
+    /// Everything [`vtu_string`] promises to reject.
+    fn validate(
+        &self,
+        cell_data: &[(&str, &[f64])],
+        point_vectors: &[(&str, &[[f64; D]])],
+    ) -> Result<(), VtuError> {
         check_finite(
-            &format!("point array {name:?}"),
-            values.iter().flatten().copied(),
-            2,
+            "point coordinates",
+            self.points.iter().flatten().copied(),
+            D,
         )?;
+        let n = self.points.len();
+        if let Some(c) = self.cells.iter().position(|c| c.iter().any(|&v| v >= n)) {
+            return Err(VtuError::Invalid(format!(
+                "cell {c} refers to a node >= {n}"
+            )));
+        }
+        check_names(cell_data.iter().map(|a| a.0))?;
+        check_names(point_vectors.iter().map(|a| a.0))?;
+        for (name, values) in cell_data {
+            let what = format!("cell array {name:?}");
+            check_length(&what, self.cells.len(), values.len())?;
+            check_finite(&what, values.iter().copied(), 1)?;
+        }
+        for (name, values) in point_vectors {
+            let what = format!("point array {name:?}");
+            check_length(&what, n, values.len())?;
+            check_finite(&what, values.iter().flatten().copied(), D)?;
+        }
+        Ok(())
     }
-    Ok(())
+
+    /// Points, z = 0 in 2D.
+    fn push_points(&self, out: &mut String) {
+        put!(out, "<Points>\n{}", float_array_tag(None, 3));
+        for p in self.points {
+            push_vec3(out, p);
+        }
+        out.push_str("</DataArray>\n</Points>\n");
+    }
+
+    /// Connectivity, offsets (end of each cell) and types.
+    fn push_cells(&self, out: &mut String) {
+        out.push_str(
+            "<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n",
+        );
+        for c in self.cells {
+            let _ = write!(out, "{}", c[0]);
+            for v in &c[1..] {
+                let _ = write!(out, " {v}");
+            }
+            out.push('\n');
+        }
+        out.push_str(
+            "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n",
+        );
+        for c in 1..=self.cells.len() {
+            put!(out, "{}", V * c);
+        }
+        out.push_str("</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+        for _ in self.cells {
+            put!(out, "{}", self.cell_type);
+        }
+        out.push_str("</DataArray>\n</Cells>\n");
+    }
+}
+
+/// One line `x y z` of a 2- or 3-vector; missing components are written
+/// as 0, since VTK points and vectors always have three.
+fn push_vec3<const D: usize>(out: &mut String, v: &[f64; D]) {
+    for (i, x) in v.iter().enumerate() {
+        let sep = if i == 0 { "" } else { " " };
+        let _ = write!(out, "{sep}{}", fmt_f64(*x));
+    }
+    for _ in D..3 {
+        out.push_str(" 0");
+    }
+    out.push('\n');
 }
 
 /// Fails on the first non-finite value; `width` values make one item.
@@ -203,12 +309,12 @@ fn float_array_tag(name: Option<&str>, components: usize) -> String {
 }
 
 /// PointData: one 3-component array per vector field.
-fn push_point_data(out: &mut String, point_vectors: &[(&str, &[[f64; 2]])]) {
+fn push_point_data<const D: usize>(out: &mut String, point_vectors: &[(&str, &[[f64; D]])]) {
     out.push_str("<PointData>\n");
     for (name, values) in point_vectors {
         put!(out, "{}", float_array_tag(Some(name), 3));
         for v in *values {
-            put!(out, "{} {} 0", fmt_f64(v[0]), fmt_f64(v[1]));
+            push_vec3(out, v);
         }
         out.push_str("</DataArray>\n");
     }
@@ -226,32 +332,6 @@ fn push_cell_data(out: &mut String, cell_data: &[(&str, &[f64])]) {
         out.push_str("</DataArray>\n");
     }
     out.push_str("</CellData>\n");
-}
-
-/// Points with z = 0.
-fn push_points(out: &mut String, mesh: &QuadMesh) {
-    put!(out, "<Points>\n{}", float_array_tag(None, 3));
-    for p in &mesh.nodes {
-        put!(out, "{} {} 0", fmt_f64(p[0]), fmt_f64(p[1]));
-    }
-    out.push_str("</DataArray>\n</Points>\n");
-}
-
-/// Connectivity, offsets (end of each cell) and types.
-fn push_cells(out: &mut String, mesh: &QuadMesh) {
-    out.push_str("<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    for c in &mesh.cells {
-        put!(out, "{} {} {} {}", c[0], c[1], c[2], c[3]);
-    }
-    out.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for c in 1..=mesh.num_cells() {
-        put!(out, "{}", 4 * c);
-    }
-    out.push_str("</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    for _ in &mesh.cells {
-        put!(out, "{VTK_QUAD}");
-    }
-    out.push_str("</DataArray>\n</Cells>\n");
 }
 
 #[cfg(test)]
@@ -335,6 +415,76 @@ mod tests {
         assert_eq!(
             std::fs::read_to_string(&path).unwrap(),
             vtu_string(&m, &[], &[]).unwrap()
+        );
+    }
+
+    // ------------------------------------------------------------ hex meshes
+
+    fn brick() -> HexMesh {
+        HexMesh::structured_box([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1])
+    }
+
+    #[test]
+    fn writes_hex_points_cells_and_arrays() {
+        let m = brick();
+        let v = [0.5, -2e-300];
+        let d: Vec<[f64; 3]> = m.nodes.iter().map(|p| [p[0], 0.1, -p[2]]).collect();
+        let text = hex_vtu_string(&m, &[("volume", &v)], &[("disp", &d)]).unwrap();
+        assert!(text.contains("<Piece NumberOfPoints=\"12\" NumberOfCells=\"2\">"));
+        assert!(text.contains(
+            "Name=\"disp\" NumberOfComponents=\"3\" format=\"ascii\">\n0 0.1 -0\n1 0.1 -0\n"
+        ));
+        assert!(text.contains(
+            "Name=\"volume\" NumberOfComponents=\"1\" format=\"ascii\">\n0.5\n-2e-300\n"
+        ));
+        assert!(text.contains("<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n0 0 0\n1 0 0\n2 0 0\n0 1 0\n"));
+        assert!(text
+            .contains("connectivity\" format=\"ascii\">\n0 1 4 3 6 7 10 9\n1 2 5 4 7 8 11 10\n"));
+        assert!(text.contains("offsets\" format=\"ascii\">\n8\n16\n"));
+        assert!(text.contains("types\" format=\"ascii\">\n12\n12\n"));
+    }
+
+    #[test]
+    fn hex_rejects_bad_input_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.vtu");
+        let mut m = brick();
+        m.nodes[7][2] = f64::NAN;
+        assert!(matches!(
+            write_hex_vtu(&path, &m, &[], &[]),
+            Err(VtuError::NonFinite { index: 7, .. })
+        ));
+        let m = brick();
+        let mut d = vec![[0.0; 3]; 12];
+        d[11][2] = f64::NEG_INFINITY;
+        let err = write_hex_vtu(&path, &m, &[], &[("d", &d)]).unwrap_err();
+        assert!(
+            matches!(err, VtuError::NonFinite { index: 11, .. }),
+            "{err}"
+        );
+        assert!(matches!(
+            write_hex_vtu(&path, &m, &[], &[("d", &d[..5])]),
+            Err(VtuError::Length {
+                expected: 12,
+                found: 5,
+                ..
+            })
+        ));
+        assert!(matches!(
+            write_hex_vtu(&path, &m, &[("", &[1.0, 2.0])], &[]),
+            Err(VtuError::Invalid(_))
+        ));
+        let mut bad = brick();
+        bad.cells[0][6] = 12;
+        assert!(matches!(
+            write_hex_vtu(&path, &bad, &[], &[]),
+            Err(VtuError::Invalid(_))
+        ));
+        assert!(!path.exists());
+        write_hex_vtu(&path, &m, &[], &[]).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            hex_vtu_string(&m, &[], &[]).unwrap()
         );
     }
 }

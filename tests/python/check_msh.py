@@ -9,6 +9,7 @@ Prints one JSON object:
   physical_names   {dim: [names, in order of physical tag]}
   elements_2d      {"tags": [...], "minDetJac": [...], "maxDetJac": [...],
                     "minSJ": [...]}, ordered by element tag
+  elements_3d      the same for the 3D elements (empty lists for a 2D mesh)
 Exits non-zero (with Gmsh's message on stderr) if Gmsh cannot read FILE.
 """
 import json
@@ -35,9 +36,9 @@ def physical_names():
     return out
 
 
-def elements_2d():
-    """Jacobian-based qualities of every 2D element, ordered by tag."""
-    _, tags, _ = gmsh.model.mesh.getElements(dim=2)
+def elements(dim):
+    """Jacobian-based qualities of every element of dimension dim, by tag."""
+    _, tags, _ = gmsh.model.mesh.getElements(dim=dim)
     all_tags = sorted(int(t) for ts in tags for t in ts)
     out = {"tags": all_tags}
     for quality in ("minDetJac", "maxDetJac", "minSJ"):
@@ -58,7 +59,8 @@ def main():
             "num_nodes": len(gmsh.model.mesh.getNodes()[0]),
             "element_types": element_types(),
             "physical_names": physical_names(),
-            "elements_2d": elements_2d(),
+            "elements_2d": elements(2),
+            "elements_3d": elements(3),
         }
     finally:
         gmsh.finalize()

@@ -1,0 +1,538 @@
+//! Algorithm 1: deformation on a moving domain.
+//!
+//! Every pseudo-time step solves `div u = −∂_t(1/f)`, `curl u = 0` by
+//! LSFEM on the current mesh and moves every node with `dφ/dt = f u`.
+//! Boundary parts decide the constraints (DESIGN.md §1):
+//! - `slip`: `u·n = 0`, the node glides along its wall and is put back
+//!   onto it after the step;
+//! - `move` to a target shape: the boundary Γ_t is the blend
+//!   `Γ_t(s) = (1−t) P₀(s) + t X(P₀(s))` of the starting chain P₀ and its
+//!   image X on the target (radial or closest-point correspondence).
+//!   `sliding` imposes only `u·n = v·n/f` and puts the node back onto
+//!   Γ_{t+dt}; `dirichlet` imposes `u = v/f`;
+//! - `fixed`: `u = 0`.
+//!
+//! Where parts meet (the corners of a box in 2D, its corners in 3D) a node
+//! has as many constraints as dimensions and follows a prescribed path; on
+//! a 3D edge between two faces it glides along the edge's curve.
+//!
+//! The stepping is written once for both dimensions; what differs — the
+//! mesh and its boundary model — comes through [`Q1Mesh`] and
+//! [`BoundaryModel`]: `chains` (2D) and `patches` (3D).
+
+mod chains;
+mod patches;
+
+use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
+use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
+use crate::solve::{CholeskySolver, SolveError, SpdSolver};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+pub use chains::min_corner_jacobian;
+
+/// A target or wall shape in D dimensions, as the boundary models need it.
+pub trait BoundaryShape<const D: usize>: Send + Sync + std::fmt::Debug {
+    /// The closest point of the shape.
+    fn closest_point(&self, p: [f64; D]) -> [f64; D];
+    /// Distance to the shape.
+    fn distance(&self, p: [f64; D]) -> f64;
+    /// Unit outward normal at the closest point.
+    fn normal(&self, p: [f64; D]) -> [f64; D];
+    /// First intersection of the ray `origin + s dir`, s > 0.
+    fn ray_hit(&self, origin: [f64; D], dir: [f64; D]) -> Option<[f64; D]>;
+}
+
+impl BoundaryShape<2> for crate::geometry::Shape {
+    fn closest_point(&self, p: [f64; 2]) -> [f64; 2] {
+        crate::geometry::Shape::closest_point(self, p)
+    }
+    fn distance(&self, p: [f64; 2]) -> f64 {
+        crate::geometry::Shape::distance(self, p)
+    }
+    fn normal(&self, p: [f64; 2]) -> [f64; 2] {
+        crate::geometry::Shape::normal(self, p)
+    }
+    fn ray_hit(&self, origin: [f64; 2], dir: [f64; 2]) -> Option<[f64; 2]> {
+        crate::geometry::Shape::ray_hit(self, origin, dir)
+    }
+}
+
+/// How a point of the starting boundary finds its place on the target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Correspondence<const D: usize = 2> {
+    /// Along the ray from a centre through the point.
+    Radial {
+        /// The centre of the rays.
+        centre: [f64; D],
+    },
+    /// The closest point of the target.
+    Normal,
+}
+
+/// How a moving boundary imposes its motion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MoveMode {
+    /// Only `u·n` is imposed; nodes glide and are put back onto Γ_t.
+    #[default]
+    Sliding,
+    /// `u = v/f`: every node follows its prescribed path (the paper).
+    Dirichlet,
+}
+
+/// What a boundary part does.
+#[derive(Clone, Debug)]
+pub enum PartKind<const D: usize = 2> {
+    /// A wall the nodes glide along: the given shape, or (None) the
+    /// starting boundary itself.
+    Slip {
+        /// The wall, if not the starting boundary.
+        wall: Option<Arc<dyn BoundaryShape<D>>>,
+    },
+    /// The part moves onto `target`.
+    Move {
+        /// The target shape.
+        target: Arc<dyn BoundaryShape<D>>,
+        /// Point correspondence.
+        correspondence: Correspondence<D>,
+        /// Sliding or Dirichlet.
+        mode: MoveMode,
+    },
+    /// Nodes do not move.
+    Fixed,
+}
+
+/// A named boundary part; boundary edges (faces) refer to parts by index.
+#[derive(Clone, Debug)]
+pub struct BoundaryPart<const D: usize = 2> {
+    /// The name (a physical group in the output).
+    pub name: String,
+    /// Its behaviour.
+    pub kind: PartKind<D>,
+}
+
+impl<const D: usize> BoundaryPart<D> {
+    /// The image X(p) on the target of a starting point p of a moving part.
+    fn image(&self, p: [f64; D]) -> Option<[f64; D]> {
+        match &self.kind {
+            PartKind::Move { target, correspondence, .. } => match correspondence {
+                Correspondence::Radial { centre } => target.ray_hit(*centre, std::array::from_fn(|i| p[i] - centre[i])),
+                Correspondence::Normal => Some(target.closest_point(p)),
+            },
+            _ => None,
+        }
+    }
+}
+
+/// A Q1 mesh as Algorithm 1 needs it: topology, positions, the boundary
+/// flux quadrature, validity, and its boundary model.
+pub trait Q1Mesh<const D: usize, const N: usize>: Clone + Send + Sync {
+    /// The boundary model of this kind of mesh.
+    type Boundary: BoundaryModel<D>;
+    /// Cells.
+    fn cells(&self) -> &[[usize; N]];
+    /// Node positions.
+    fn nodes(&self) -> &[[f64; D]];
+    /// Node positions, to move.
+    fn nodes_mut(&mut self) -> &mut Vec<[f64; D]>;
+    /// Quadrature of the boundary flux at positions `nodes` for nodal
+    /// boundary velocities `v`: pairs (x, v·n dS).
+    fn flux_points<'a>(&'a self, nodes: &'a [[f64; D]], v: &'a [[f64; D]]) -> impl Iterator<Item = ([f64; D], f64)> + 'a;
+    /// Cells whose Jacobian is not positive everywhere at positions `nodes`.
+    fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize>;
+    /// Area or volume at the current positions.
+    fn measure(&self) -> f64;
+    /// Splits the boundary into the model's pieces and checks that every
+    /// moving part can reach its target.
+    fn boundary(&self, parts: Vec<BoundaryPart<D>>) -> Result<Self::Boundary, DeformError>;
+}
+
+/// How boundary nodes are constrained and put back onto their shapes.
+pub trait BoundaryModel<const D: usize>: Send + Sync {
+    /// Per-node state that a rejected step must restore.
+    type State: Clone + Send + Sync;
+    /// The parts.
+    fn parts(&self) -> &[BoundaryPart<D>];
+    /// The nodal velocity v of the moving boundary (zero elsewhere).
+    fn velocities(&self, out: &mut [[f64; D]]);
+    /// Every node's constraint at time t, prescribed values divided by f
+    /// (`f(i)` at node i).
+    fn fill_constraints(&self, t: f64, nodes: &[[f64; D]], f: impl Fn(usize) -> f64, out: &mut [Constraint<D>]);
+    /// Puts boundary nodes exactly back onto Γ_t, their walls or paths.
+    fn put_back(&mut self, nodes: &mut [[f64; D]], t: f64);
+    /// For each node of a moving part, its distance to the target.
+    fn distances(&self, nodes: &[[f64; D]]) -> Vec<(usize, f64)>;
+    /// The per-node state.
+    fn state(&self) -> &Self::State;
+    /// Replaces the per-node state.
+    fn state_mut(&mut self) -> &mut Self::State;
+}
+
+/// Explicit time integrators for `dφ/dt = f u`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Integrator {
+    /// Forward Euler (the paper).
+    #[default]
+    Euler,
+    /// Heun's method (explicit trapezoid, second order).
+    Heun,
+}
+
+/// Errors of the deformation.
+#[derive(Debug, thiserror::Error)]
+pub enum DeformError {
+    /// The correspondence cannot reach the target from some boundary point.
+    #[error("boundary part `{part}`: {why}")]
+    Unreachable {
+        /// The part.
+        part: String,
+        /// Why.
+        why: String,
+    },
+    /// The prescribed Jacobian failed.
+    #[error(transparent)]
+    Jacobian(#[from] JacobianError),
+    /// The linear solver failed.
+    #[error("the linear solver failed")]
+    Solve(#[from] SolveError),
+    /// The assembly failed for a reason other than an inverted cell.
+    #[error(transparent)]
+    Lsfem(#[from] LsfemError),
+    /// The mesh would tangle even with much smaller steps.
+    #[error("the mesh tangles at t = {t:.4} even with step {dt:.3e}: {} inverted cell(s), first {:?}", cells.len(), &cells[..cells.len().min(10)])]
+    Tangled {
+        /// The pseudo-time reached.
+        t: f64,
+        /// The smallest step tried.
+        dt: f64,
+        /// The cells that invert.
+        cells: Vec<usize>,
+    },
+    /// The starting mesh is invalid.
+    #[error("the starting mesh has {} inverted cell(s), first {:?}", .0.len(), &.0[..(.0.len().min(10))])]
+    InvalidStart(Vec<usize>),
+}
+
+/// Timings and counters of a run.
+#[derive(Clone, Debug, Default)]
+pub struct RunStats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Steps retried with half the step size.
+    pub halved: usize,
+    /// LSFEM solves (one per Euler step, two per Heun step, plus retries).
+    pub solves: usize,
+    /// Time in assembly (including normalisation).
+    pub assembly: Duration,
+    /// Time in numeric factorisation.
+    pub factor: Duration,
+    /// Time in the triangular solves.
+    pub solve: Duration,
+    /// Time in the symbolic analysis (once).
+    pub analyze: Duration,
+}
+
+/// Options of Algorithm 1.
+#[derive(Clone, Debug)]
+pub struct DeformOptions {
+    /// Number of nominal steps from t = 0 to 1.
+    pub steps: usize,
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Weight of the div term in the functional.
+    pub div_weight: f64,
+    /// Give up when the step has been halved this often in a row.
+    pub max_halvings: usize,
+}
+
+impl Default for DeformOptions {
+    fn default() -> Self {
+        DeformOptions { steps: 40, integrator: Integrator::Euler, div_weight: 1.0, max_halvings: 12 }
+    }
+}
+
+/// The state of Algorithm 1 on one mesh: a [`crate::mesh::QuadMesh`]
+/// (D = 2, N = 4) or a [`crate::mesh::HexMesh`] (D = 3, N = 8).
+pub struct Deformation<M: Q1Mesh<D, N> = crate::mesh::QuadMesh, const D: usize = 2, const N: usize = 4> {
+    /// The mesh at the current pseudo-time.
+    pub mesh: M,
+    /// Node positions at t = 0.
+    pub start: Vec<[f64; D]>,
+    /// The current pseudo-time.
+    pub t: f64,
+    /// Counters and timings.
+    pub stats: RunStats,
+    boundary: M::Boundary,
+    initial_state: <M::Boundary as BoundaryModel<D>>::State,
+    field: JacobianField,
+    options: DeformOptions,
+    volume0: f64,
+    system: DivCurlSystem<D, N>,
+    solver: Box<dyn SpdSolver>,
+    // buffers reused every step
+    constraints: Vec<Constraint<D>>,
+    bvel: Vec<[f64; D]>,
+    u: Vec<[f64; D]>,
+    k1: Vec<[f64; D]>,
+    stage: Vec<[f64; D]>,
+    next: Vec<[f64; D]>,
+    x: Vec<f64>,
+    saved_state: <M::Boundary as BoundaryModel<D>>::State,
+}
+
+/// Algorithm 1 on a hexahedral mesh.
+pub type Deformation3 = Deformation<crate::mesh::HexMesh, 3, 8>;
+
+impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
+    /// Prepares Algorithm 1: classifies nodes, checks that every moving
+    /// part can reach its target, builds the pattern and analyses it.
+    pub fn new(mesh: M, parts: Vec<BoundaryPart<D>>, field: JacobianField, options: DeformOptions) -> Result<Self, DeformError> {
+        Self::with_solver(mesh, parts, field, options, Box::new(CholeskySolver::new()))
+    }
+
+    /// As [`Deformation::new`] with a given solver.
+    pub fn with_solver(
+        mesh: M,
+        parts: Vec<BoundaryPart<D>>,
+        field: JacobianField,
+        options: DeformOptions,
+        mut solver: Box<dyn SpdSolver>,
+    ) -> Result<Self, DeformError> {
+        let bad = mesh.invalid_cells(mesh.nodes());
+        if !bad.is_empty() {
+            return Err(DeformError::InvalidStart(bad));
+        }
+        let boundary = mesh.boundary(parts)?;
+        // constraint kinds are fixed for the run: build the pattern once
+        let n = mesh.nodes().len();
+        let mut constraints = vec![Constraint::free(); n];
+        boundary.fill_constraints(0.0, mesh.nodes(), |_| 1.0, &mut constraints);
+        let mut system = DivCurlSystem::new(mesh.cells(), &constraints);
+        system.div_weight = options.div_weight;
+        let t0 = Instant::now();
+        solver.analyze(system.pattern())?;
+        let stats = RunStats { analyze: t0.elapsed(), ..Default::default() };
+        Ok(Deformation {
+            start: mesh.nodes().to_vec(),
+            volume0: mesh.measure(),
+            t: 0.0,
+            stats,
+            x: vec![0.0; system.num_unknowns()],
+            system,
+            constraints,
+            bvel: vec![[0.0; D]; n],
+            u: vec![[0.0; D]; n],
+            k1: vec![[0.0; D]; n],
+            stage: mesh.nodes().to_vec(),
+            next: mesh.nodes().to_vec(),
+            saved_state: boundary.state().clone(),
+            initial_state: boundary.state().clone(),
+            mesh,
+            boundary,
+            field,
+            options,
+            solver,
+        })
+    }
+
+    /// Back to t = 0 (nodes, boundary parameters), keeping the analysed
+    /// pattern and the statistics: for repeated measurements.
+    pub fn reset(&mut self) {
+        self.mesh.nodes_mut().clone_from(&self.start);
+        self.boundary.state_mut().clone_from(&self.initial_state);
+        self.t = 0.0;
+    }
+
+    /// The boundary parts.
+    pub fn parts(&self) -> &[BoundaryPart<D>] {
+        self.boundary.parts()
+    }
+
+    /// The prescribed Jacobian.
+    pub fn field(&self) -> &JacobianField {
+        &self.field
+    }
+
+    /// Normalisation at the current state (t, current nodes).
+    pub fn normalisation_now(&self) -> Result<Normalisation, DeformError> {
+        let mut bvel = vec![[0.0; D]; self.start.len()];
+        self.boundary.velocities(&mut bvel);
+        let flux = self.mesh.flux_points(self.mesh.nodes(), &bvel);
+        Ok(normalise(self.mesh.cells(), self.mesh.nodes(), &self.field, self.t, self.volume0, flux)?)
+    }
+
+    /// J/f per cell at the current state (see [`crate::quality::jf_ratios`]).
+    pub fn jf_now(&self) -> Result<Vec<f64>, DeformError> {
+        let norm = self.normalisation_now()?;
+        Ok(crate::quality::jf_ratios(self.mesh.cells(), self.mesh.nodes(), &self.start, &self.field, &norm))
+    }
+
+    /// Number of unknowns of the reduced LSFEM system.
+    pub fn num_unknowns(&self) -> usize {
+        self.system.num_unknowns()
+    }
+
+    /// The solver in use.
+    pub fn solver_name(&self) -> &'static str {
+        self.solver.name()
+    }
+
+    /// Runs from the current t to 1 with the nominal step 1/steps, landing
+    /// exactly on each of `stops` (sorted pseudo-times); `on_stop` is
+    /// called there, `on_step` after every accepted step.
+    pub fn run(
+        &mut self,
+        stops: &[f64],
+        mut on_stop: impl FnMut(&Self),
+        mut on_step: impl FnMut(&Self),
+    ) -> Result<(), DeformError> {
+        let dt = 1.0 / self.options.steps.max(1) as f64;
+        let t_start = self.t;
+        let mut stops = stops.iter().copied().filter(|&s| s >= t_start).peekable();
+        while stops.peek().is_some_and(|&s| s <= self.t + 1e-12) {
+            stops.next();
+            on_stop(self);
+        }
+        while self.t < 1.0 - 1e-12 {
+            let target = stops.peek().copied().unwrap_or(1.0).min(1.0);
+            let h = dt.min(target - self.t);
+            self.step(h)?;
+            if (self.t - target).abs() < 1e-12 {
+                self.t = target;
+                if stops.peek().is_some() {
+                    stops.next();
+                    on_stop(self);
+                }
+            }
+            on_step(self);
+        }
+        self.t = 1.0;
+        for _ in stops {
+            on_stop(self);
+        }
+        Ok(())
+    }
+
+    /// One step of size `h` (halved until no cell inverts).
+    pub fn step(&mut self, h: f64) -> Result<(), DeformError> {
+        let mut h = h;
+        for attempt in 0..=self.options.max_halvings {
+            match self.try_step(h)? {
+                None => {
+                    self.stats.steps += 1;
+                    return Ok(());
+                }
+                Some(bad) if attempt == self.options.max_halvings => {
+                    return Err(DeformError::Tangled { t: self.t, dt: h, cells: bad });
+                }
+                Some(_) => {
+                    self.stats.halved += 1;
+                    h *= 0.5;
+                }
+            }
+        }
+        unreachable!("the loop returns on its last attempt")
+    }
+
+    /// Tries a step; on success updates the state and returns None, else
+    /// leaves the state untouched and returns the cells that would invert.
+    fn try_step(&mut self, h: f64) -> Result<Option<Vec<usize>>, DeformError> {
+        self.saved_state.clone_from(self.boundary.state());
+        let nodes = std::mem::take(self.mesh.nodes_mut());
+        let result = self.advance(&nodes, self.t, h);
+        *self.mesh.nodes_mut() = nodes;
+        let failure = match result {
+            Ok(()) => {
+                let bad = self.mesh.invalid_cells(&self.next);
+                if bad.is_empty() {
+                    std::mem::swap(self.mesh.nodes_mut(), &mut self.next);
+                    self.t += h;
+                    return Ok(None);
+                }
+                Ok(Some(bad))
+            }
+            Err(StepFailure::Inverted(cell)) => Ok(Some(vec![cell])),
+            Err(StepFailure::Fatal(e)) => Err(e),
+        };
+        // the boundary parameters moved with the rejected step: restore them
+        std::mem::swap(self.boundary.state_mut(), &mut self.saved_state);
+        failure
+    }
+
+    /// Writes into `self.next` the positions after one step of the
+    /// integrator from `nodes` at time t.
+    fn advance(&mut self, nodes: &[[f64; D]], t: f64, h: f64) -> Result<(), StepFailure> {
+        self.node_velocity(nodes, t)?;
+        self.k1.copy_from_slice(&self.u);
+        for ((o, x), k) in self.next.iter_mut().zip(nodes).zip(&self.k1) {
+            *o = std::array::from_fn(|i| x[i] + h * k[i]);
+        }
+        if self.options.integrator == Integrator::Heun {
+            // the stage mesh conforms to Γ_{t+h} too
+            self.boundary.put_back(&mut self.next, t + h);
+            let mut stage = std::mem::take(&mut self.stage);
+            stage.copy_from_slice(&self.next);
+            let r = self.node_velocity(&stage, t + h);
+            self.stage = stage;
+            r?;
+            for ((o, x), (a, b)) in self.next.iter_mut().zip(nodes).zip(self.k1.iter().zip(&self.u)) {
+                *o = std::array::from_fn(|i| x[i] + 0.5 * h * (a[i] + b[i]));
+            }
+        }
+        self.boundary.put_back(&mut self.next, t + h);
+        Ok(())
+    }
+
+    /// Solves the LSFEM system at positions `nodes`, time t, and stores the
+    /// node velocity f u in `self.u`.
+    fn node_velocity(&mut self, nodes: &[[f64; D]], t: f64) -> Result<(), StepFailure> {
+        let t0 = Instant::now();
+        self.boundary.velocities(&mut self.bvel);
+        let flux = self.mesh.flux_points(nodes, &self.bvel);
+        let norm = normalise(self.mesh.cells(), nodes, &self.field, t, self.volume0, flux).map_err(DeformError::from)?;
+        let field = &self.field;
+        self.boundary.fill_constraints(t, nodes, |i| norm.f(field, lift(nodes[i])), &mut self.constraints);
+        self.system
+            .assemble(nodes, &self.constraints, |x| norm.div_data(field, lift(x)))
+            .map_err(|e| match e {
+                LsfemError::Inverted { cell, .. } => StepFailure::Inverted(cell),
+                other => StepFailure::Fatal(other.into()),
+            })?;
+        self.stats.assembly += t0.elapsed();
+        let t1 = Instant::now();
+        self.solver.factor(&self.system.values).map_err(DeformError::from)?;
+        let t2 = Instant::now();
+        self.x.copy_from_slice(&self.system.rhs);
+        self.solver.solve_in_place(&mut self.x).map_err(DeformError::from)?;
+        self.stats.factor += t2 - t1;
+        self.stats.solve += t2.elapsed();
+        self.stats.solves += 1;
+        self.system.expand(&self.x, &self.constraints, &mut self.u);
+        for (i, u) in self.u.iter_mut().enumerate() {
+            let f = norm.f(field, lift(nodes[i]));
+            *u = u.map(|c| f * c);
+        }
+        Ok(())
+    }
+
+    /// For each node on a moving part, its distance to the target shape.
+    pub fn boundary_distances(&self) -> Vec<(usize, f64)> {
+        self.boundary.distances(self.mesh.nodes())
+    }
+}
+
+/// Why a step attempt failed.
+enum StepFailure {
+    /// A cell inverted during a stage: retry with a smaller step.
+    Inverted(usize),
+    /// Anything else: give up.
+    Fatal(DeformError),
+}
+
+impl From<DeformError> for StepFailure {
+    fn from(e: DeformError) -> Self {
+        StepFailure::Fatal(e)
+    }
+}
+

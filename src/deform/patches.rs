@@ -1,0 +1,1 @@
+//! The 3D boundary model (faces, edges, corners of a hex mesh).
