@@ -6,11 +6,16 @@
 //! thicker boundary, a vertical colour bar with five labelled ticks on the
 //! right, and an optional title on top. The y axis points up. Text uses a
 //! small built-in bitmap font ([`font`]), since tiny-skia has none.
+//!
+//! Hexahedral meshes are drawn by [`render_hex`]: the shaded boundary
+//! surface seen by a [`Camera`], optionally cut open by a [`ClipPlane`],
+//! with the same colour bar and title.
 
 mod colour;
 mod draw;
 mod encode;
 pub mod font;
+mod hex;
 mod layout;
 mod legend;
 #[cfg(test)]
@@ -20,6 +25,7 @@ use tiny_skia::{Color, Pixmap};
 
 pub use colour::ColourMap;
 pub use encode::{gif_bytes, png_bytes, write_gif, write_png};
+pub use hex::{render_hex, Camera, ClipPlane, RenderOptions3};
 
 use crate::mesh::QuadMesh;
 use layout::Layout;
@@ -75,6 +81,32 @@ pub enum RenderError {
         lo: [f64; 2],
         /// Upper-right corner.
         hi: [f64; 2],
+    },
+    /// The 3D world box is not finite or is a single point (also for a hex
+    /// mesh with no nodes, when no box is given).
+    #[error("bounds {lo:?}..{hi:?} are not a finite box of positive size")]
+    InvalidBounds3 {
+        /// Lower corner.
+        lo: [f64; 3],
+        /// Upper corner.
+        hi: [f64; 3],
+    },
+    /// The camera cannot give a picture: an angle is not finite, the
+    /// elevation is outside ±90°, or the perspective distance is not finite
+    /// or puts the eye inside the framed box's bounding sphere (≤ 1).
+    #[error("degenerate camera: {reason}")]
+    InvalidCamera {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// The clip plane's point or normal is not finite, or the normal is
+    /// zero.
+    #[error("clip plane through {point:?} with normal {normal:?} is degenerate")]
+    InvalidClipPlane {
+        /// The point given.
+        point: [f64; 3],
+        /// The normal given.
+        normal: [f64; 3],
     },
     /// The colour range is not finite or is reversed.
     #[error("colour range {low}..{high} is not a finite, increasing range")]

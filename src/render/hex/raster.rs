@@ -1,0 +1,311 @@
+//! A small z-buffer rasteriser: flat-coloured quads (as two triangles)
+//! with their borders darkened as edge lines, a silhouette pass, and
+//! averaging down into a pixmap.
+
+use tiny_skia::{Pixmap, PremultipliedColorU8};
+
+/// Colour of edge and silhouette lines: the soft black of the 2D pictures.
+pub(crate) const INK: [u8; 3] = [25, 25, 25];
+
+/// How cell edges are drawn on the faces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct EdgeStyle {
+    /// Half the line width in canvas samples: each face darkens this much
+    /// along its own border, so a shared edge gets the full width.
+    pub half_width: f64,
+    /// Opacity of the line.
+    pub alpha: f32,
+}
+
+/// A white RGB image with a depth per sample (infinite where nothing was
+/// drawn).
+pub(crate) struct Canvas {
+    width: usize,
+    height: usize,
+    rgb: Vec<[u8; 3]>,
+    depth: Vec<f32>,
+}
+
+impl Canvas {
+    /// A blank canvas of `width × height` samples.
+    pub fn new(width: u32, height: u32) -> Canvas {
+        let n = width as usize * height as usize;
+        Canvas {
+            width: width as usize,
+            height: height as usize,
+            rgb: vec![[255; 3]; n],
+            depth: vec![f32::INFINITY; n],
+        }
+    }
+
+    /// Draws the quad with corners `q` (x, y in samples, depth key; smaller
+    /// is nearer) in `colour` where it is nearer than what is there, with
+    /// its border darkened by `edges`. Split along the 0–2 diagonal.
+    pub fn fill_quad(&mut self, q: &[[f64; 3]; 4], colour: [u8; 3], edges: Option<EdgeStyle>) {
+        let border = [[q[0], q[1]], [q[1], q[2]], [q[2], q[3]], [q[3], q[0]]];
+        let paint = |x: f64, y: f64| match edges {
+            Some(style) => edge_blend(colour, style, distance_to_border(&border, x, y)),
+            None => colour,
+        };
+        self.fill_triangle([q[0], q[1], q[2]], &paint);
+        self.fill_triangle([q[0], q[2], q[3]], &paint);
+    }
+
+    /// Rasterises one triangle: a sample is inside when its centre is on
+    /// the inner side of all three edges (inclusive, so triangles sharing
+    /// an edge leave no gap), and is written when its interpolated depth is
+    /// nearer than the stored one.
+    fn fill_triangle(&mut self, t: [[f64; 3]; 3], paint: &impl Fn(f64, f64) -> [u8; 3]) {
+        let area = orient(t[0], t[1], t[2][0], t[2][1]);
+        // Seen edge-on (or collapsed): nothing to fill, and dividing by the
+        // area would give garbage.
+        if area.abs() < 1e-9 {
+            return;
+        }
+        let Some((xs, ys)) = self.sample_range(&t) else {
+            return;
+        };
+        for y in ys {
+            let py = y as f64 + 0.5;
+            for x in xs.clone() {
+                let px = x as f64 + 0.5;
+                let w = [
+                    orient(t[1], t[2], px, py) / area,
+                    orient(t[2], t[0], px, py) / area,
+                    orient(t[0], t[1], px, py) / area,
+                ];
+                if w.iter().any(|&wi| wi < -1e-9) {
+                    continue;
+                }
+                let depth = (w[0] * t[0][2] + w[1] * t[1][2] + w[2] * t[2][2]) as f32;
+                let i = y * self.width + x;
+                if depth < self.depth[i] {
+                    self.depth[i] = depth;
+                    self.rgb[i] = paint(px, py);
+                }
+            }
+        }
+    }
+
+    /// The columns and rows of samples whose centres may lie in the
+    /// triangle, clamped to the canvas; `None` if it is off the canvas.
+    fn sample_range(
+        &self,
+        t: &[[f64; 3]; 3],
+    ) -> Option<(std::ops::Range<usize>, std::ops::Range<usize>)> {
+        let span = |k: usize, len: usize| {
+            let lo = t.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+            let hi = t.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+            // Sample i has its centre at i + 0.5.
+            let first = (lo - 0.5).ceil().max(0.0);
+            let last = (hi - 0.5).floor().min(len as f64 - 1.0);
+            (first <= last).then(|| first as usize..last as usize + 1)
+        };
+        Some((span(0, self.width)?, span(1, self.height)?))
+    }
+
+    /// Darkens covered samples within `radius` samples (horizontally and
+    /// vertically) of an uncovered one: the silhouette line, drawn inside
+    /// the outline so it never spills onto the background. Samples outside
+    /// the canvas count as covered, so a mesh cut off by the frame gets no
+    /// line along the cut.
+    pub fn outline(&mut self, radius: usize, ink: [u8; 3], alpha: f32) {
+        let empty: Vec<bool> = self.depth.iter().map(|d| d.is_infinite()).collect();
+        let rows = dilate(&empty, self.width, self.height, radius, 1, self.width);
+        let near_empty = dilate(&rows, self.height, self.width, radius, self.width, 1);
+        for i in 0..self.rgb.len() {
+            if near_empty[i] && !empty[i] {
+                self.rgb[i] = blend(self.rgb[i], ink, alpha);
+            }
+        }
+    }
+
+    /// Averages each `ss × ss` block of samples into one pixel of `pixmap`
+    /// at offset (`x0`, `y0`); blocks with nothing drawn are left alone.
+    pub fn blit(&self, pixmap: &mut Pixmap, x0: u32, y0: u32, ss: u32) {
+        let ss = ss as usize;
+        let (pw, ph) = (pixmap.width() as usize, pixmap.height() as usize);
+        let (x0, y0) = (x0 as usize, y0 as usize);
+        let pixels = pixmap.pixels_mut();
+        for oy in 0..(self.height / ss).min(ph.saturating_sub(y0)) {
+            for ox in 0..(self.width / ss).min(pw.saturating_sub(x0)) {
+                if let Some([r, g, b]) = self.block_mean(ox * ss, oy * ss, ss) {
+                    let c = PremultipliedColorU8::from_rgba(r, g, b, 255);
+                    pixels[(y0 + oy) * pw + x0 + ox] = c.expect("opaque colours are valid");
+                }
+            }
+        }
+    }
+
+    /// Mean colour of the block with top-left sample (x, y), rounded, or
+    /// `None` if no sample in it was drawn.
+    fn block_mean(&self, x: usize, y: usize, ss: usize) -> Option<[u8; 3]> {
+        let mut sum = [0u32; 3];
+        let mut drawn = false;
+        for row in y..y + ss {
+            for i in row * self.width + x..row * self.width + x + ss {
+                drawn |= self.depth[i].is_finite();
+                for (s, &c) in sum.iter_mut().zip(&self.rgb[i]) {
+                    *s += c as u32;
+                }
+            }
+        }
+        let n = (ss * ss) as u32;
+        drawn.then(|| sum.map(|s| ((s + n / 2) / n) as u8))
+    }
+}
+
+/// Twice the signed area of triangle (a, b, p) in the plane: which side of
+/// the line a→b the point p is on.
+fn orient(a: [f64; 3], b: [f64; 3], px: f64, py: f64) -> f64 {
+    (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])
+}
+
+/// Distance in the plane from (x, y) to the nearest side of the quad.
+fn distance_to_border(border: &[[[f64; 3]; 2]; 4], x: f64, y: f64) -> f64 {
+    border
+        .iter()
+        .map(|[a, b]| distance_to_segment(*a, *b, x, y))
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn distance_to_segment(a: [f64; 3], b: [f64; 3], x: f64, y: f64) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((x - a[0]) * dx + (y - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (x - a[0] - t * dx).hypot(y - a[1] - t * dy)
+}
+
+/// The face colour with the edge line laid over it: full line opacity
+/// within the half-width, fading out over one sample so lines at shallow
+/// angles do not look stepped.
+fn edge_blend(colour: [u8; 3], style: EdgeStyle, distance: f64) -> [u8; 3] {
+    let coverage = (style.half_width + 0.5 - distance).clamp(0.0, 1.0) as f32;
+    if coverage <= 0.0 {
+        return colour;
+    }
+    blend(colour, INK, style.alpha * coverage)
+}
+
+/// `under` with `over` laid on top at opacity `alpha`.
+fn blend(under: [u8; 3], over: [u8; 3], alpha: f32) -> [u8; 3] {
+    std::array::from_fn(|k| {
+        (under[k] as f32 + alpha * (over[k] as f32 - under[k] as f32)).round() as u8
+    })
+}
+
+/// For a grid of `len` lines of `count` flags each (consecutive flags
+/// `step` apart, consecutive lines `stride` apart), whether any flag within
+/// `radius` along the line is set. Run once along rows and once along
+/// columns this is a square dilation in time independent of the radius.
+fn dilate(
+    flags: &[bool],
+    count: usize,
+    lines: usize,
+    radius: usize,
+    step: usize,
+    stride: usize,
+) -> Vec<bool> {
+    let mut out = vec![false; flags.len()];
+    let mut prefix = vec![0u32; count + 1];
+    for line in 0..lines {
+        let at = |i: usize| line * stride + i * step;
+        for i in 0..count {
+            prefix[i + 1] = prefix[i] + flags[at(i)] as u32;
+        }
+        for i in 0..count {
+            let (lo, hi) = (i.saturating_sub(radius), (i + radius + 1).min(count));
+            out[at(i)] = prefix[hi] > prefix[lo];
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearer_quad_wins_whatever_the_drawing_order() {
+        let far = [
+            [0.0, 0.0, 5.0],
+            [10.0, 0.0, 5.0],
+            [10.0, 10.0, 5.0],
+            [0.0, 10.0, 5.0],
+        ];
+        let near = far.map(|p| [p[0], p[1], 1.0]);
+        for order in [[far, near], [near, far]] {
+            let mut c = Canvas::new(10, 10);
+            for q in &order {
+                let colour = if q[0][2] == 1.0 {
+                    [0, 0, 255]
+                } else {
+                    [255, 0, 0]
+                };
+                c.fill_quad(q, colour, None);
+            }
+            assert!(c.rgb.iter().all(|&p| p == [0, 0, 255]));
+            assert!(c.depth.iter().all(|&d| d == 1.0));
+        }
+    }
+
+    #[test]
+    fn neighbouring_quads_leave_no_gap_and_either_winding_fills() {
+        let mut c = Canvas::new(20, 10);
+        let left = [
+            [0.0, 0.0, 0.0],
+            [7.3, 0.0, 0.0],
+            [7.3, 10.0, 0.0],
+            [0.0, 10.0, 0.0],
+        ];
+        // Clockwise on screen: must fill as well.
+        let right = [
+            [7.3, 0.0, 0.0],
+            [7.3, 10.0, 0.0],
+            [20.0, 10.0, 0.0],
+            [20.0, 0.0, 0.0],
+        ];
+        c.fill_quad(&left, [1, 1, 1], None);
+        c.fill_quad(&right, [2, 2, 2], None);
+        assert!(c.depth.iter().all(|d| d.is_finite()));
+    }
+
+    #[test]
+    fn edges_darken_only_near_the_border() {
+        let mut c = Canvas::new(20, 20);
+        let q = [
+            [0.0, 0.0, 0.0],
+            [20.0, 0.0, 0.0],
+            [20.0, 20.0, 0.0],
+            [0.0, 20.0, 0.0],
+        ];
+        let style = EdgeStyle {
+            half_width: 1.5,
+            alpha: 1.0,
+        };
+        c.fill_quad(&q, [200, 200, 200], Some(style));
+        assert_eq!(c.rgb[10 * 20 + 10], [200, 200, 200]);
+        assert_eq!(c.rgb[10 * 20], INK, "sample centre 0.5 from the border");
+    }
+
+    #[test]
+    fn outline_marks_covered_samples_next_to_empty_ones() {
+        let mut c = Canvas::new(10, 10);
+        let q = [
+            [2.0, 2.0, 0.0],
+            [8.0, 2.0, 0.0],
+            [8.0, 8.0, 0.0],
+            [2.0, 8.0, 0.0],
+        ];
+        c.fill_quad(&q, [200, 200, 200], None);
+        c.outline(1, INK, 1.0);
+        assert_eq!(c.rgb[2 * 10 + 2], INK);
+        assert_eq!(c.rgb[5 * 10 + 2], INK);
+        assert_eq!(c.rgb[5 * 10 + 5], [200, 200, 200]);
+        assert_eq!(c.rgb[0], [255, 255, 255], "background stays white");
+    }
+}

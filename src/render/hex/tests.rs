@@ -1,0 +1,714 @@
+//! Tests that render real hex-mesh pictures, encode them as PNG, decode
+//! them again and check pixels: colours, shading, positions, hidden
+//! surfaces, clipping and errors.
+
+use image::RgbaImage;
+
+use super::view::{self, shade_colour};
+use super::*;
+use crate::render::png_bytes;
+
+const BLUE_VALUE: f64 = 0.9;
+const RED_VALUE: f64 = 1.1;
+
+fn brick(n: [usize; 3]) -> HexMesh {
+    HexMesh::structured_box([0.0; 3], [n[0] as f64, n[1] as f64, n[2] as f64], n)
+}
+
+/// Looking straight down the z axis (x right, y up in the picture).
+fn from_above() -> Camera {
+    Camera {
+        azimuth_deg: 0.0,
+        elevation_deg: 90.0,
+        distance: None,
+    }
+}
+
+fn opts(camera: Camera) -> RenderOptions3 {
+    RenderOptions3 {
+        width: 400,
+        camera,
+        ..RenderOptions3::default()
+    }
+}
+
+/// Renders, encodes to PNG and decodes it again, returning the image and
+/// the plan used, to locate things.
+fn render_decoded(mesh: &HexMesh, values: &[f64], opts: &RenderOptions3) -> (RgbaImage, Plan3) {
+    let pixmap = render_hex(mesh, values, opts).unwrap();
+    let png = png_bytes(&pixmap).unwrap();
+    let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
+        .unwrap()
+        .to_rgba8();
+    assert_eq!(
+        (img.width(), img.height()),
+        (pixmap.width(), pixmap.height())
+    );
+    (img, Plan3::new(mesh, values, opts).unwrap())
+}
+
+fn pixel(img: &RgbaImage, x: f64, y: f64) -> [u8; 3] {
+    let p = img.get_pixel(x as u32, y as u32).0;
+    assert_eq!(p[3], 255, "picture should be opaque");
+    [p[0], p[1], p[2]]
+}
+
+/// The pixel showing world point `p`.
+fn pixel_of(img: &RgbaImage, plan: &Plan3, p: [f64; 3]) -> [u8; 3] {
+    let [x, y, _] = plan.to_image(p).unwrap();
+    pixel(img, x, y)
+}
+
+fn assert_close(found: [u8; 3], expected: [u8; 3], what: &str) {
+    let ok = (0..3).all(|k| found[k].abs_diff(expected[k]) <= 1);
+    assert!(ok, "{what}: found {found:?}, expected {expected:?}");
+}
+
+/// The colour a face of value `v` with outward unit normal `n` (facing
+/// the viewer) must have: the map's colour times the light factor.
+fn expected(plan: &Plan3, v: f64, n: [f64; 3]) -> [u8; 3] {
+    shade_colour(plan.cmap.colour(v, plan.range), plan.view.light_factor(n))
+}
+
+fn is_white(c: [u8; 3]) -> bool {
+    c == [255, 255, 255]
+}
+
+fn bluish(c: [u8; 3]) -> bool {
+    c[2] as i32 > c[0] as i32 + 20
+}
+
+fn reddish(c: [u8; 3]) -> bool {
+    c[0] as i32 > c[2] as i32 + 20
+}
+
+/// Pixel rows and columns of the plot region, where the mesh may be drawn.
+fn plot_pixels(plan: &Plan3) -> impl Iterator<Item = (u32, u32)> {
+    let [x0, y0, w, h] = plot_region(&plan.layout);
+    (y0..y0 + h).flat_map(move |y| (x0..x0 + w).map(move |x| (x, y)))
+}
+
+/// Bounding box (x0, y0, x1, y1) of the non-white pixels of the plot
+/// region, found from the image alone.
+fn drawn_box(img: &RgbaImage, plan: &Plan3) -> [u32; 4] {
+    let mut b = [u32::MAX, u32::MAX, 0, 0];
+    for (x, y) in plot_pixels(plan) {
+        if !is_white(pixel(img, x as f64, y as f64)) {
+            b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
+        }
+    }
+    b
+}
+
+#[test]
+fn cube_from_above_fills_a_square_with_its_top_colour() {
+    let mesh = brick([1, 1, 1]);
+    let o = RenderOptions3 {
+        bounds: Some(([-1.0, -1.0, 0.0], [2.0, 2.0, 1.0])),
+        ..opts(from_above())
+    };
+    let (img, plan) = render_decoded(&mesh, &[1.05], &o);
+    let top = expected(&plan, 1.05, [0.0, 0.0, 1.0]);
+    assert!(reddish(top), "1.05 is above the centre: {top:?}");
+
+    // The drawn region is a square of the unit cube's size.
+    let [x0, y0, x1, y1] = drawn_box(&img, &plan);
+    let side = plan.layout.scale();
+    assert!(
+        ((x1 - x0 + 1) as f64 - side).abs() <= 2.0,
+        "width {} vs {side}",
+        x1 - x0 + 1
+    );
+    assert!(
+        ((y1 - y0 + 1) as f64 - side).abs() <= 2.0,
+        "height {} vs {side}",
+        y1 - y0 + 1
+    );
+    // It is where the cube is: the middle third of the framed 3×3 box.
+    let [px, py, pw, _] = plan.layout.plot;
+    assert!((x0 as f64 - (px + pw / 3.0)).abs() <= 2.0);
+    assert!((y0 as f64 - (py + pw / 3.0)).abs() <= 2.0);
+
+    // Inside (away from the silhouette line) it is the shaded top colour;
+    // outside it the plot stays white.
+    for (x, y) in plot_pixels(&plan) {
+        let c = pixel(&img, x as f64, y as f64);
+        let inside = x >= x0 + 3 && x + 3 <= x1 && y >= y0 + 3 && y + 3 <= y1;
+        let outside = x + 2 < x0 || x > x1 + 2 || y + 2 < y0 || y > y1 + 2;
+        if inside {
+            assert_close(c, top, &format!("inside at ({x}, {y})"));
+        } else if outside {
+            assert!(is_white(c), "outside at ({x}, {y}): {c:?}");
+        }
+    }
+    // The silhouette is drawn dark.
+    let mid = (y0 + y1) / 2;
+    let edge = pixel(&img, x0 as f64, mid as f64);
+    assert!(
+        edge.iter().all(|&c| c < top[0].min(top[1]).min(top[2])),
+        "outline {edge:?}"
+    );
+}
+
+#[test]
+fn side_by_side_cells_show_their_own_colours_in_the_right_place() {
+    let mesh = brick([2, 1, 1]);
+    let values = [BLUE_VALUE, RED_VALUE];
+    let (img, plan) = render_decoded(&mesh, &values, &opts(from_above()));
+    // Found from the image alone: the left half is cell 0 (x < 1), the
+    // right half cell 1, so x points right.
+    let [x0, y0, x1, y1] = drawn_box(&img, &plan);
+    let (w, ymid) = ((x1 - x0) as f64, (y0 + y1) as f64 / 2.0);
+    let left = pixel(&img, x0 as f64 + 0.25 * w, ymid);
+    let right = pixel(&img, x0 as f64 + 0.75 * w, ymid);
+    assert!(
+        bluish(left) && reddish(right),
+        "left {left:?}, right {right:?}"
+    );
+    let up = [0.0, 0.0, 1.0];
+    assert_close(left, expected(&plan, BLUE_VALUE, up), "cell 0");
+    assert_close(right, expected(&plan, RED_VALUE, up), "cell 1");
+}
+
+#[test]
+fn y_points_up_when_looking_down() {
+    let mesh = brick([1, 2, 1]);
+    let (img, plan) = render_decoded(&mesh, &[BLUE_VALUE, RED_VALUE], &opts(from_above()));
+    let [x0, y0, x1, y1] = drawn_box(&img, &plan);
+    let (xmid, h) = ((x0 + x1) as f64 / 2.0, (y1 - y0) as f64);
+    assert!(
+        bluish(pixel(&img, xmid, y0 as f64 + 0.75 * h)),
+        "cell 0 (y < 1) at the bottom"
+    );
+    assert!(reddish(pixel(&img, xmid, y0 as f64 + 0.25 * h)));
+}
+
+#[test]
+fn three_quarter_view_shades_top_front_and_side_differently() {
+    let mesh = brick([2, 1, 1]);
+    let values = [BLUE_VALUE, RED_VALUE];
+    let (img, plan) = render_decoded(&mesh, &values, &opts(Camera::default()));
+    let faces = [
+        ([0.0, 0.0, 1.0], [0.5, 0.5, 1.0], [1.5, 0.5, 1.0]), // top
+        ([0.0, -1.0, 0.0], [0.5, 0.0, 0.5], [1.5, 0.0, 0.5]), // front, y = 0
+    ];
+    for (n, c0, c1) in faces {
+        assert_close(
+            pixel_of(&img, &plan, c0),
+            expected(&plan, BLUE_VALUE, n),
+            "cell 0",
+        );
+        assert_close(
+            pixel_of(&img, &plan, c1),
+            expected(&plan, RED_VALUE, n),
+            "cell 1",
+        );
+    }
+    let side = [1.0, 0.0, 0.0];
+    let at = [2.0, 0.5, 0.5];
+    assert_close(
+        pixel_of(&img, &plan, at),
+        expected(&plan, RED_VALUE, side),
+        "x = 2 side",
+    );
+    // The light from the upper left makes the top brightest and the
+    // right-facing side darkest, with every face still well lit.
+    let f = |n| plan.view.light_factor(n);
+    let (top, front, right) = (f([0.0, 0.0, 1.0]), f([0.0, -1.0, 0.0]), f(side));
+    assert!(
+        top > front + 0.05 && front > right + 0.05,
+        "{top} {front} {right}"
+    );
+    assert!(
+        right > 0.5,
+        "the darkest side keeps a readable colour: {right}"
+    );
+}
+
+/// Renders `mesh` (two cells, values blue then red) with the cells and
+/// values also listed in reverse order, so a renderer that lets the last
+/// drawn face win fails one of the two.
+fn both_orders(mesh: &HexMesh, o: &RenderOptions3) -> Vec<(RgbaImage, Plan3)> {
+    let mut reversed = mesh.clone();
+    reversed.cells.reverse();
+    vec![
+        render_decoded(mesh, &[BLUE_VALUE, RED_VALUE], o),
+        render_decoded(&reversed, &[RED_VALUE, BLUE_VALUE], o),
+    ]
+}
+
+#[test]
+fn a_cell_behind_another_is_hidden() {
+    // Cell 0 (blue) is below cell 1 (red).
+    let column = brick([1, 1, 2]);
+    let below = Camera {
+        elevation_deg: -90.0,
+        ..from_above()
+    };
+    for (camera, visible, hidden) in [
+        (
+            from_above(),
+            reddish as fn([u8; 3]) -> bool,
+            bluish as fn([u8; 3]) -> bool,
+        ),
+        (below, bluish, reddish),
+    ] {
+        for (img, plan) in both_orders(&column, &opts(camera)) {
+            let centre = pixel_of(&img, &plan, [0.5, 0.5, 1.0]);
+            assert!(visible(centre), "the near cell shows: {centre:?}");
+            let leaks = plot_pixels(&plan)
+                .filter(|&(x, y)| hidden(pixel(&img, x as f64, y as f64)))
+                .count();
+            assert_eq!(leaks, 0, "the far cell must not show through");
+        }
+    }
+}
+
+#[test]
+fn a_cell_behind_another_is_hidden_from_the_side() {
+    // Cell 0 (blue, x < 1) and cell 1 (red, x > 1), seen along ∓x.
+    let row = brick([2, 1, 1]);
+    for (az, visible, hidden) in [
+        (
+            90.0,
+            reddish as fn([u8; 3]) -> bool,
+            bluish as fn([u8; 3]) -> bool,
+        ),
+        (-90.0, bluish, reddish),
+    ] {
+        let camera = Camera {
+            azimuth_deg: az,
+            elevation_deg: 0.0,
+            distance: Some(4.0),
+        };
+        for (img, plan) in both_orders(&row, &opts(camera)) {
+            let centre = pixel_of(&img, &plan, [1.0, 0.5, 0.5]);
+            assert!(visible(centre), "azimuth {az}: {centre:?}");
+            let leaks = plot_pixels(&plan)
+                .filter(|&(x, y)| hidden(pixel(&img, x as f64, y as f64)))
+                .count();
+            assert_eq!(leaks, 0, "azimuth {az}: the far cell shows through");
+        }
+    }
+}
+
+#[test]
+fn clip_plane_exposes_the_inner_face() {
+    let mesh = brick([2, 1, 1]);
+    let values = [BLUE_VALUE, RED_VALUE];
+    let from_right = Camera {
+        azimuth_deg: 90.0,
+        elevation_deg: 0.0,
+        distance: None,
+    };
+    let n = [1.0, 0.0, 0.0];
+    let (img, plan) = render_decoded(&mesh, &values, &opts(from_right));
+    assert_close(
+        pixel_of(&img, &plan, [2.0, 0.5, 0.5]),
+        expected(&plan, RED_VALUE, n),
+        "unclipped: the end face of cell 1",
+    );
+
+    let clipped = RenderOptions3 {
+        clip: Some(ClipPlane {
+            point: [1.0, 0.3, 0.7],
+            normal: [2.0, 0.0, 0.0],
+        }),
+        ..opts(from_right)
+    };
+    let (img, plan) = render_decoded(&mesh, &values, &clipped);
+    assert_eq!(plan.kept, [true, false]);
+    assert_eq!(plan.range, (BLUE_VALUE, RED_VALUE), "range from all values");
+    assert_close(
+        pixel_of(&img, &plan, [1.0, 0.5, 0.5]),
+        expected(&plan, BLUE_VALUE, n),
+        "clipped: the inner face of cell 0",
+    );
+    let reds = plot_pixels(&plan)
+        .filter(|&(x, y)| reddish(pixel(&img, x as f64, y as f64)))
+        .count();
+    assert_eq!(reds, 0, "the dropped cell is not drawn");
+}
+
+#[test]
+fn clipping_a_brick_in_a_three_quarter_view_shows_the_cut() {
+    // 4×4×4 cells with a value that depends on x only; cutting at x = 2
+    // from the default view must show the cut face (x = 2, value of the
+    // cells at 1 < x < 2) where the unclipped brick shows nothing.
+    let mesh = brick([4, 4, 4]);
+    let values: Vec<f64> = (0..64).map(|c| 0.9 + 0.05 * (c % 4) as f64).collect();
+    let clip = ClipPlane {
+        point: [2.0, 0.0, 0.0],
+        normal: [1.0, 0.0, 0.0],
+    };
+    let o = RenderOptions3 {
+        clip: Some(clip),
+        ..opts(Camera::default())
+    };
+    let (img, plan) = render_decoded(&mesh, &values, &o);
+    let want = expected(&plan, 0.95, [1.0, 0.0, 0.0]);
+    for p in [[2.0, 1.5, 1.5], [2.0, 2.5, 2.5], [2.0, 3.5, 0.5]] {
+        assert_close(
+            pixel_of(&img, &plan, p),
+            want,
+            &format!("cut face at {p:?}"),
+        );
+    }
+}
+
+#[test]
+fn edges_are_drawn_between_faces_and_can_be_turned_off() {
+    let mesh = brick([2, 1, 1]);
+    let values = [1.0, 1.0];
+    let lum = |c: [u8; 3]| c.iter().map(|&v| v as i32).sum::<i32>();
+    for draw_edges in [true, false] {
+        let o = RenderOptions3 {
+            draw_edges,
+            ..opts(from_above())
+        };
+        let (img, plan) = render_decoded(&mesh, &values, &o);
+        let face = lum(pixel_of(&img, &plan, [0.5, 0.5, 1.0]));
+        let on_edge = lum(pixel_of(&img, &plan, [1.0, 0.5, 1.0]));
+        if draw_edges {
+            assert!(on_edge < face - 60, "edge {on_edge} vs face {face}");
+        } else {
+            assert!((on_edge - face).abs() <= 3, "no edge: {on_edge} vs {face}");
+        }
+    }
+}
+
+#[test]
+fn edges_are_left_out_when_faces_are_tiny() {
+    let style = |mesh: &HexMesh| {
+        let values = vec![1.0; mesh.num_cells()];
+        let o = opts(Camera::default());
+        let plan = Plan3::new(mesh, &values, &o).unwrap();
+        let faces = surface::surface_faces(&mesh.cells, &plan.kept);
+        edge_style(&plan, mesh, &faces, true)
+    };
+    assert!(style(&brick([2, 2, 2])).is_some());
+    // A thin plate of 100 × 100 cells: faces of about 2 pixels.
+    let fine = HexMesh::structured_box([0.0; 3], [1.0, 1.0, 0.01], [100, 100, 1]);
+    assert_eq!(style(&fine), None);
+}
+
+#[test]
+fn perspective_makes_far_edges_shorter() {
+    // From the front and above, the silhouette of a cube is bounded by the
+    // far top edge above and the near bottom edge below: equally long in a
+    // parallel view, the far one shorter in perspective.
+    let mesh = brick([1, 1, 1]);
+    let widths = |distance| {
+        let camera = Camera {
+            azimuth_deg: 0.0,
+            elevation_deg: 30.0,
+            distance,
+        };
+        let (img, plan) = render_decoded(&mesh, &[1.0], &opts(camera));
+        let [_, y0, _, y1] = drawn_box(&img, &plan);
+        let row_width = |y: u32| {
+            let [x0, _, w, _] = plot_region(&plan.layout);
+            (x0..x0 + w)
+                .filter(|&x| !is_white(pixel(&img, x as f64, y as f64)))
+                .count() as f64
+        };
+        (row_width(y0 + 3), row_width(y1 - 3))
+    };
+    let (top, bottom) = widths(None);
+    assert!((top - bottom).abs() <= 2.0, "parallel: {top} vs {bottom}");
+    let (top, bottom) = widths(Some(2.0));
+    assert!(top < 0.85 * bottom, "perspective: {top} vs {bottom}");
+}
+
+#[test]
+fn frames_with_the_same_bounds_line_up() {
+    let a = brick([2, 2, 2]);
+    let mut b = a.clone();
+    for p in &mut b.nodes {
+        p[2] *= 1.0 + 0.2 * p[0];
+    }
+    let bounds = Some(([0.0; 3], [2.0, 2.0, 3.0]));
+    let o = RenderOptions3 {
+        bounds,
+        ..opts(Camera::default())
+    };
+    let values = vec![1.0; 8];
+    let (pa, pb) = (
+        Plan3::new(&a, &values, &o).unwrap(),
+        Plan3::new(&b, &values, &o).unwrap(),
+    );
+    assert_eq!(
+        (pa.layout.width, pa.layout.height),
+        (pb.layout.width, pb.layout.height)
+    );
+    let p = [1.0, 0.0, 2.0];
+    assert_eq!(pa.to_image(p), pb.to_image(p));
+    // Without a box each frames itself, so they differ.
+    let o = opts(Camera::default());
+    let (pa, pb) = (
+        Plan3::new(&a, &values, &o).unwrap(),
+        Plan3::new(&b, &values, &o).unwrap(),
+    );
+    assert_ne!(pa.to_image(p), pb.to_image(p));
+}
+
+#[test]
+fn colour_bar_and_title_are_drawn() {
+    let mesh = brick([2, 1, 1]);
+    let o = RenderOptions3 {
+        title: Some("t = 0.5".into()),
+        ..opts(Camera::default())
+    };
+    let (img, plan) = render_decoded(&mesh, &[BLUE_VALUE, RED_VALUE], &o);
+    let [bx, by, bw, bh] = plan.layout.bar;
+    let x = (bx + bw / 2) as f64;
+    assert_close(
+        pixel(&img, x, by as f64),
+        plan.cmap.colour(RED_VALUE, plan.range),
+        "bar top",
+    );
+    let bottom = (by + bh - 1) as f64;
+    assert_close(
+        pixel(&img, x, bottom),
+        plan.cmap.colour(BLUE_VALUE, plan.range),
+        "bar bottom",
+    );
+    let title_top = plan.layout.title_top as u32;
+    let dark = (title_top..title_top + 10)
+        .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
+        .filter(|&(x, y)| pixel(&img, x as f64, y as f64)[0] < 100)
+        .count();
+    assert!(dark > 20, "title text expected, found {dark} dark pixels");
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let mesh = brick([1, 1, 1]);
+    let ok = RenderOptions3::default();
+    let err = |m: &HexMesh, v: &[f64], o: &RenderOptions3| render_hex(m, v, o).unwrap_err();
+
+    assert!(matches!(
+        err(&mesh, &[1.0, 2.0], &ok),
+        RenderError::LengthMismatch {
+            values: 2,
+            cells: 1
+        }
+    ));
+    assert!(matches!(
+        err(&mesh, &[], &ok),
+        RenderError::LengthMismatch { .. }
+    ));
+    assert!(matches!(
+        err(&mesh, &[f64::NAN], &ok),
+        RenderError::NonFiniteValue { index: 0 }
+    ));
+    assert!(matches!(
+        err(&mesh, &[f64::INFINITY], &ok),
+        RenderError::NonFiniteValue { index: 0 }
+    ));
+
+    let mut bad = mesh.clone();
+    bad.nodes[5][1] = f64::NAN;
+    assert!(matches!(
+        err(&bad, &[1.0], &ok),
+        RenderError::NonFiniteNode { index: 5 }
+    ));
+    let mut bad = mesh.clone();
+    bad.nodes[2][2] = f64::NEG_INFINITY;
+    assert!(matches!(
+        err(&bad, &[1.0], &ok),
+        RenderError::NonFiniteNode { index: 2 }
+    ));
+    let mut bad = mesh.clone();
+    bad.cells[0][7] = 99;
+    assert!(matches!(
+        err(&bad, &[1.0], &ok),
+        RenderError::BadNodeIndex {
+            cell: 0,
+            node: 99,
+            nodes: 8
+        }
+    ));
+
+    for camera in [
+        Camera {
+            elevation_deg: 90.5,
+            ..Camera::default()
+        },
+        Camera {
+            elevation_deg: -91.0,
+            ..Camera::default()
+        },
+        Camera {
+            elevation_deg: f64::NAN,
+            ..Camera::default()
+        },
+        Camera {
+            azimuth_deg: f64::INFINITY,
+            ..Camera::default()
+        },
+        Camera {
+            distance: Some(1.0),
+            ..Camera::default()
+        },
+        Camera {
+            distance: Some(0.0),
+            ..Camera::default()
+        },
+        Camera {
+            distance: Some(-3.0),
+            ..Camera::default()
+        },
+        Camera {
+            distance: Some(f64::NAN),
+            ..Camera::default()
+        },
+        Camera {
+            distance: Some(f64::INFINITY),
+            ..Camera::default()
+        },
+    ] {
+        let o = RenderOptions3 {
+            camera,
+            ..ok.clone()
+        };
+        assert!(
+            matches!(err(&mesh, &[1.0], &o), RenderError::InvalidCamera { .. }),
+            "{camera:?}"
+        );
+    }
+
+    for clip in [
+        ClipPlane {
+            point: [0.5; 3],
+            normal: [0.0; 3],
+        },
+        ClipPlane {
+            point: [f64::NAN, 0.0, 0.0],
+            normal: [1.0, 0.0, 0.0],
+        },
+        ClipPlane {
+            point: [0.5; 3],
+            normal: [1.0, f64::INFINITY, 0.0],
+        },
+    ] {
+        let o = RenderOptions3 {
+            clip: Some(clip),
+            ..ok.clone()
+        };
+        assert!(matches!(
+            err(&mesh, &[1.0], &o),
+            RenderError::InvalidClipPlane { .. }
+        ));
+    }
+
+    for bounds in [
+        ([0.0, 0.0, 0.0], [1.0, -1.0, 1.0]),
+        ([0.0, 0.0, f64::NAN], [1.0, 1.0, 1.0]),
+        ([0.5; 3], [0.5; 3]),
+    ] {
+        let o = RenderOptions3 {
+            bounds: Some(bounds),
+            ..ok.clone()
+        };
+        assert!(matches!(
+            err(&mesh, &[1.0], &o),
+            RenderError::InvalidBounds3 { .. }
+        ));
+    }
+    let empty = HexMesh {
+        nodes: vec![],
+        cells: vec![],
+        faces: vec![],
+        part_names: vec![],
+    };
+    assert!(matches!(
+        err(&empty, &[], &ok),
+        RenderError::InvalidBounds3 { .. }
+    ));
+
+    let o = RenderOptions3 {
+        range: Some((2.0, 1.0)),
+        ..ok.clone()
+    };
+    assert!(matches!(
+        err(&mesh, &[1.0], &o),
+        RenderError::InvalidRange { .. }
+    ));
+    let o = RenderOptions3 {
+        width: 120,
+        ..ok.clone()
+    };
+    assert!(matches!(
+        err(&mesh, &[1.0], &o),
+        RenderError::ImageSize { .. }
+    ));
+}
+
+#[test]
+fn edge_cases_still_render() {
+    let mesh = brick([2, 1, 1]);
+    let values = [BLUE_VALUE, RED_VALUE];
+    // A plane that drops every cell leaves an empty plot.
+    let o = RenderOptions3 {
+        clip: Some(ClipPlane {
+            point: [-1.0, 0.0, 0.0],
+            normal: [1.0, 0.0, 0.0],
+        }),
+        ..opts(Camera::default())
+    };
+    let (img, plan) = render_decoded(&mesh, &values, &o);
+    assert!(plot_pixels(&plan).all(|(x, y)| is_white(pixel(&img, x as f64, y as f64))));
+    // An empty mesh with a box, a flat cell seen edge-on, a collapsed
+    // cell, extreme elevations and a box that cuts through the mesh
+    // behind a perspective eye.
+    let empty = HexMesh {
+        nodes: vec![],
+        cells: vec![],
+        faces: vec![],
+        part_names: vec![],
+    };
+    let boxed = RenderOptions3 {
+        bounds: Some(([0.0; 3], [1.0; 3])),
+        ..RenderOptions3::default()
+    };
+    render_hex(&empty, &[], &boxed).unwrap();
+    let flat = HexMesh::structured_box([0.0; 3], [1.0, 1.0, 0.0], [1, 1, 1]);
+    let side = Camera {
+        azimuth_deg: 0.0,
+        elevation_deg: 0.0,
+        distance: None,
+    };
+    render_hex(&flat, &[1.0], &opts(side)).unwrap();
+    let mut collapsed = brick([1, 1, 1]);
+    collapsed.nodes = vec![[0.3; 3]; 8];
+    collapsed.nodes[0] = [0.0; 3];
+    render_hex(&collapsed, &[1.0], &opts(Camera::default())).unwrap();
+    for elevation_deg in [-90.0, 90.0] {
+        let camera = Camera {
+            elevation_deg,
+            distance: Some(1.5),
+            ..Camera::default()
+        };
+        render_hex(&mesh, &values, &opts(camera)).unwrap();
+    }
+    let cut = RenderOptions3 {
+        camera: Camera {
+            distance: Some(1.2),
+            ..Camera::default()
+        },
+        bounds: Some(([0.0; 3], [0.2; 3])),
+        ..opts(Camera::default())
+    };
+    render_hex(&brick([4, 4, 4]), &vec![1.0; 64], &cut).unwrap();
+}
+
+#[test]
+fn light_factor_is_ambient_for_faces_turned_from_the_light() {
+    let plan = Plan3::new(&brick([1, 1, 1]), &[1.0], &opts(from_above())).unwrap();
+    // From above, the light comes from above the viewer: a face seen
+    // head-on is lit, and its reverse normal only gets the ambient share.
+    let lit = plan.view.light_factor([0.0, 0.0, 1.0]);
+    assert!(lit > 0.9 && lit <= 1.0, "{lit}");
+    assert_eq!(plan.view.light_factor([0.0, 0.0, -1.0]), view::AMBIENT);
+}
