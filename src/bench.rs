@@ -30,7 +30,7 @@ impl StepTiming {
 /// Prepares the demo case at n×n cells with one nominal step.
 pub fn demo_deformation(n: usize) -> Result<Deformation, Box<dyn std::error::Error + Send + Sync>> {
     let mut case = Case::parse(DEMO_CASE, "<built-in demo>")?;
-    case.mesh.cells = [n, n];
+    case.mesh.cells = vec![n, n];
     case.time.steps = 100;
     let s = case.setup("<built-in demo>", Path::new("."))?;
     Ok(Deformation::new(s.mesh, s.parts, s.field, s.options)?)

@@ -7,8 +7,9 @@
 use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, BoundaryShape};
 use crate::expr::Expr;
 use crate::geometry::ShapeSpec;
+use crate::geometry3::SurfaceSpec;
 use crate::jacobian::{lift, ImageField, JacobianField, Target, TimePath, EXPR_VARS};
-use crate::mesh::{QuadMesh, BOX_SIDES};
+use crate::mesh::{HexMesh, QuadMesh, BOX_FACES, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -46,16 +47,16 @@ pub struct Case {
     pub output: OutputSpec,
 }
 
-/// A structured box mesh.
+/// A structured box mesh: a rectangle (two numbers each) or a brick (three).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSpec {
     /// Lower corner.
-    pub lower: [f64; 2],
+    pub lower: Vec<f64>,
     /// Upper corner.
-    pub upper: [f64; 2],
-    /// Cells along x and y.
-    pub cells: [usize; 2],
+    pub upper: Vec<f64>,
+    /// Cells along each axis.
+    pub cells: Vec<usize>,
 }
 
 /// Kinds of boundary parts.
@@ -96,19 +97,21 @@ pub enum ModeSpec {
 pub struct PartSpec {
     /// Part name (a physical group in the MSH output).
     pub name: String,
-    /// Box sides: `left`, `right`, `bottom`, `top`.
+    /// Box sides: `left`, `right`, `bottom`, `top` (2D) or faces `xmin`,
+    /// `xmax`, `ymin`, `ymax`, `zmin`, `zmax` (3D).
     pub sides: Vec<String>,
     /// `slip`, `move` or `fixed`.
     pub kind: PartKindSpec,
-    /// Target (move) or wall (slip; default: the side itself).
+    /// Target (move) or wall (slip; default: the side itself): a curve
+    /// ([`ShapeSpec`]) in 2D, a surface ([`SurfaceSpec`]) in 3D.
     #[serde(default)]
-    pub shape: Option<ShapeSpec>,
+    pub shape: Option<toml::Value>,
     /// `radial` (needs `centre`) or `normal` (default).
     #[serde(default)]
     pub correspondence: Option<CorrespondenceSpec>,
     /// Centre of the radial correspondence.
     #[serde(default)]
-    pub centre: Option<[f64; 2]>,
+    pub centre: Option<Vec<f64>>,
     /// `sliding` (default) or `dirichlet`.
     #[serde(default)]
     pub mode: Option<ModeSpec>,
@@ -198,6 +201,36 @@ pub struct OutputSpec {
     /// Picture width in pixels.
     #[serde(default = "default_width")]
     pub width: u32,
+    /// 3D: where the picture is seen from.
+    #[serde(default)]
+    pub camera: Option<CameraSpec>,
+    /// 3D: cut the picture open with a plane (cells on the side the
+    /// normal points to are left out).
+    #[serde(default)]
+    pub clip: Option<ClipSpec>,
+}
+
+/// The camera of 3D pictures.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Degrees about the z axis (0 looks along +y).
+    pub azimuth: f64,
+    /// Degrees above the xy plane.
+    pub elevation: f64,
+    /// Perspective distance in bounding-sphere radii (orthographic if absent).
+    #[serde(default)]
+    pub distance: Option<f64>,
+}
+
+/// A clip plane for 3D pictures.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClipSpec {
+    /// A point of the plane.
+    pub point: [f64; 3],
+    /// Its normal: cells on this side are left out.
+    pub normal: [f64; 3],
 }
 
 fn default_width() -> u32 {
@@ -206,24 +239,33 @@ fn default_width() -> u32 {
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { frames: Vec::new(), animation: false, width: default_width() }
+        OutputSpec { frames: Vec::new(), animation: false, width: default_width(), camera: None, clip: None }
     }
 }
 
-/// A case translated into what the method needs.
-pub struct Setup {
+/// A case translated into what the method needs, for a mesh `M` in D
+/// dimensions.
+pub struct Setup<M = QuadMesh, const D: usize = 2> {
     /// Name for titles and the report.
     pub name: String,
-    /// The starting mesh, boundary edges tagged with part indices.
-    pub mesh: QuadMesh,
+    /// The starting mesh, boundary edges (faces) tagged with part indices.
+    pub mesh: M,
     /// The boundary parts.
-    pub parts: Vec<BoundaryPart>,
+    pub parts: Vec<BoundaryPart<D>>,
     /// The prescribed Jacobian.
     pub field: JacobianField,
     /// Options of Algorithm 1.
     pub options: DeformOptions,
     /// Output options.
     pub output: OutputSpec,
+}
+
+/// A 2D or a 3D setup.
+pub enum AnySetup {
+    /// Quadrilaterals.
+    Quad(Setup<QuadMesh, 2>),
+    /// Hexahedra.
+    Hex(Setup<HexMesh, 3>),
 }
 
 impl Case {
@@ -238,16 +280,43 @@ impl Case {
         toml::from_str(text).map_err(|e| CaseError { file: file.to_string(), message: e.to_string().trim_end().to_string() })
     }
 
-    /// Checks the case and builds mesh, parts and field. Relative paths
+    /// The number of dimensions (2 or 3), from the mesh table.
+    pub fn dimension(&self, file: &str) -> Result<usize, CaseError> {
+        let m = &self.mesh;
+        let d = m.lower.len();
+        if !(d == 2 || d == 3) || m.upper.len() != d || m.cells.len() != d {
+            return Err(CaseError {
+                file: file.to_string(),
+                message: format!(
+                    "fields `mesh.lower`, `mesh.upper`, `mesh.cells`: expected two numbers each (2D) or three each (3D), got {}, {}, {}",
+                    m.lower.len(),
+                    m.upper.len(),
+                    m.cells.len()
+                ),
+            });
+        }
+        Ok(d)
+    }
+
+    /// Checks a 2D case and builds mesh, parts and field. Relative paths
     /// (images) are resolved against `base_dir`.
     pub fn setup(&self, file: &str, base_dir: &Path) -> Result<Setup, CaseError> {
-        let err = |message: String| CaseError { file: file.to_string(), message };
-        let mesh_spec = &self.mesh;
-        if mesh_spec.cells[0] == 0 || mesh_spec.cells[1] == 0 {
-            return Err(err("field `mesh.cells`: both counts must be at least 1".into()));
+        match self.setup_any(file, base_dir)? {
+            AnySetup::Quad(s) => Ok(s),
+            AnySetup::Hex(_) => Err(CaseError { file: file.to_string(), message: "a 2D case was expected, this one is 3D".into() }),
         }
-        if !(mesh_spec.upper[0] > mesh_spec.lower[0] && mesh_spec.upper[1] > mesh_spec.lower[1]) {
-            return Err(err("fields `mesh.lower`/`mesh.upper`: upper must exceed lower in x and y".into()));
+    }
+
+    /// Checks a 2D or 3D case and builds mesh, parts and field.
+    pub fn setup_any(&self, file: &str, base_dir: &Path) -> Result<AnySetup, CaseError> {
+        let err = |message: String| CaseError { file: file.to_string(), message };
+        let dim = self.dimension(file)?;
+        let m = &self.mesh;
+        if m.cells.contains(&0) {
+            return Err(err("field `mesh.cells`: every count must be at least 1".into()));
+        }
+        if (0..dim).any(|k| !(m.upper[k] > m.lower[k])) {
+            return Err(err("fields `mesh.lower`/`mesh.upper`: upper must exceed lower along every axis".into()));
         }
         if self.time.steps == 0 {
             return Err(err("field `time.steps`: must be at least 1".into()));
@@ -261,47 +330,62 @@ impl Case {
         if self.output.width < 200 {
             return Err(err("field `output.width`: must be at least 200 pixels".into()));
         }
-        let mut mesh = QuadMesh::structured_box(mesh_spec.lower, mesh_spec.upper, mesh_spec.cells[0], mesh_spec.cells[1]);
-        let (parts, side_part) = self.parts(file)?;
-        // re-tag the box's side indices with part indices
-        for e in &mut mesh.edges {
-            e.part = side_part[e.part];
+        if dim == 2 && (self.output.camera.is_some() || self.output.clip.is_some()) {
+            return Err(err("fields `output.camera` and `output.clip` are for 3D cases".into()));
         }
-        mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
         let field = self.field(file, base_dir)?;
-        check_positive(&field, &mesh).map_err(|e| err(format!("field `jacobian`: {e}")))?;
-        let mut frames = self.output.frames.clone();
-        frames.sort_by(f64::total_cmp);
-        frames.dedup();
-        Ok(Setup {
-            name: self.name.clone().unwrap_or_else(|| Path::new(file).file_stem().map_or("case".into(), |s| s.to_string_lossy().into_owned())),
-            mesh,
-            parts,
-            field,
-            options: DeformOptions { steps: self.time.steps, integrator: self.time.integrator, div_weight: self.time.div_weight, ..Default::default() },
-            output: OutputSpec { frames, ..self.output.clone() },
-        })
+        let mut output = self.output.clone();
+        output.frames.sort_by(f64::total_cmp);
+        output.frames.dedup();
+        let name = self.name.clone().unwrap_or_else(|| Path::new(file).file_stem().map_or("case".into(), |s| s.to_string_lossy().into_owned()));
+        let options = DeformOptions { steps: self.time.steps, integrator: self.time.integrator, div_weight: self.time.div_weight, ..Default::default() };
+        if dim == 2 {
+            let mut mesh = QuadMesh::structured_box([m.lower[0], m.lower[1]], [m.upper[0], m.upper[1]], m.cells[0], m.cells[1]);
+            let (parts, side_part) = self.parts(file, &BOX_SIDES, build_curve)?;
+            // re-tag the box's side indices with part indices
+            mesh.edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
+            mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
+            let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
+            check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
+            Ok(AnySetup::Quad(Setup { name, mesh, parts, field, options, output }))
+        } else {
+            let mut mesh = HexMesh::structured_box([m.lower[0], m.lower[1], m.lower[2]], [m.upper[0], m.upper[1], m.upper[2]], [m.cells[0], m.cells[1], m.cells[2]]);
+            let (parts, face_part) = self.parts(file, &BOX_FACES, build_surface)?;
+            mesh.faces.iter_mut().for_each(|f| f.part = face_part[f.part]);
+            mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
+            if matches!(field.target, Target::Image(_)) {
+                return Err(err("field `jacobian`: image fields are 2D only".into()));
+            }
+            let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
+            check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
+            Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output }))
+        }
     }
 
-    /// Boundary parts, and for each box side the index of its part.
-    fn parts(&self, file: &str) -> Result<(Vec<BoundaryPart>, [usize; 4]), CaseError> {
+    /// Boundary parts, and for each box side (face) the index of its part.
+    fn parts<const D: usize>(
+        &self,
+        file: &str,
+        sides: &[&str],
+        build: fn(&toml::Value) -> Result<Arc<dyn BoundaryShape<D>>, String>,
+    ) -> Result<(Vec<BoundaryPart<D>>, Vec<usize>), CaseError> {
         let err = |message: String| CaseError { file: file.to_string(), message };
-        let mut side_part = [usize::MAX; 4];
-        let mut parts = Vec::new();
+        let mut side_part = vec![usize::MAX; sides.len()];
+        let mut parts: Vec<BoundaryPart<D>> = Vec::new();
         for (k, spec) in self.boundary.iter().enumerate() {
             let here = format!("boundary[{k}] (`{}`)", spec.name);
             if spec.name.trim().is_empty() {
                 return Err(err(format!("field `boundary[{k}].name`: must not be empty")));
             }
-            if parts.iter().any(|p: &BoundaryPart| p.name == spec.name) {
+            if parts.iter().any(|p| p.name == spec.name) {
                 return Err(err(format!("{here}: the name `{}` is used twice", spec.name)));
             }
             if spec.sides.is_empty() {
                 return Err(err(format!("{here}: field `sides` is empty")));
             }
             for side in &spec.sides {
-                let Some(s) = BOX_SIDES.iter().position(|b| b == side) else {
-                    return Err(err(format!("{here}: unknown side `{side}` in `sides` (expected one of left, right, bottom, top)")));
+                let Some(s) = sides.iter().position(|b| b == side) else {
+                    return Err(err(format!("{here}: unknown side `{side}` in `sides` (expected one of {})", sides.join(", "))));
                 };
                 if side_part[s] != usize::MAX {
                     let other = if side_part[s] == parts.len() { &spec.name } else { &parts[side_part[s]].name };
@@ -309,11 +393,11 @@ impl Case {
                 }
                 side_part[s] = parts.len();
             }
-            let kind = part_kind(spec).map_err(|m| err(format!("{here}: {m}")))?;
+            let kind = part_kind(spec, build).map_err(|m| err(format!("{here}: {m}")))?;
             parts.push(BoundaryPart { name: spec.name.clone(), kind });
         }
         // sides nobody named stay slip walls under their own name
-        for (s, side) in BOX_SIDES.iter().enumerate() {
+        for (s, side) in sides.iter().enumerate() {
             if side_part[s] == usize::MAX {
                 if parts.iter().any(|p| p.name == *side) {
                     return Err(err(format!("side `{side}` is in no part, but a part is already named `{side}`")));
@@ -345,12 +429,8 @@ impl Case {
 
 /// g must be positive on the starting domain at every pseudo-time; where
 /// the domain moves to is checked during the run.
-fn check_positive(field: &JacobianField, mesh: &QuadMesh) -> Result<(), crate::jacobian::JacobianError> {
-    let centres = (0..mesh.num_cells()).map(|c| {
-        let p = mesh.cell_coords(c);
-        [0.25 * (p[0][0] + p[1][0] + p[2][0] + p[3][0]), 0.25 * (p[0][1] + p[1][1] + p[2][1] + p[3][1])]
-    });
-    for x in mesh.nodes.iter().copied().chain(centres) {
+fn check_positive<const D: usize>(field: &JacobianField, points: impl Iterator<Item = [f64; D]>) -> Result<(), crate::jacobian::JacobianError> {
+    for x in points {
         for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
             field.g_checked(lift(x), t)?;
         }
@@ -358,13 +438,26 @@ fn check_positive(field: &JacobianField, mesh: &QuadMesh) -> Result<(), crate::j
     Ok(())
 }
 
+fn centroid<const D: usize, const N: usize>(p: &[[f64; D]; N]) -> [f64; D] {
+    std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / N as f64)
+}
+
+/// A 2D curve from a case's `shape` table.
+fn build_curve(v: &toml::Value) -> Result<Arc<dyn BoundaryShape<2>>, String> {
+    let spec: ShapeSpec = v.clone().try_into().map_err(|e| format!("field `shape`: {}", e.to_string().trim_end()))?;
+    Ok(Arc::new(spec.build().map_err(|e| format!("field `shape`: {e}"))?))
+}
+
+/// A 3D surface from a case's `shape` table.
+fn build_surface(v: &toml::Value) -> Result<Arc<dyn BoundaryShape<3>>, String> {
+    let spec: SurfaceSpec = v.clone().try_into().map_err(|e| format!("field `shape`: {}", e.to_string().trim_end()))?;
+    Ok(Arc::new(spec.build().map_err(|e| format!("field `shape`: {e}"))?))
+}
+
 /// Translates one part's spec into its kind, checking the fields that
 /// belong together.
-fn part_kind(spec: &PartSpec) -> Result<PartKind, String> {
-    let shape = match &spec.shape {
-        Some(s) => Some(Arc::new(s.build().map_err(|e| format!("field `shape`: {e}"))?) as Arc<dyn BoundaryShape<2>>),
-        None => None,
-    };
+fn part_kind<const D: usize>(spec: &PartSpec, build: fn(&toml::Value) -> Result<Arc<dyn BoundaryShape<D>>, String>) -> Result<PartKind<D>, String> {
+    let shape = spec.shape.as_ref().map(build).transpose()?;
     let move_only = spec.correspondence.is_some() || spec.centre.is_some() || spec.mode.is_some();
     match spec.kind {
         PartKindSpec::Slip | PartKindSpec::Fixed if move_only => {
@@ -378,9 +471,11 @@ fn part_kind(spec: &PartSpec) -> Result<PartKind, String> {
             let correspondence = match spec.correspondence.unwrap_or(CorrespondenceSpec::Normal) {
                 CorrespondenceSpec::Normal if spec.centre.is_some() => return Err("`centre` is only used with correspondence = \"radial\"".into()),
                 CorrespondenceSpec::Normal => Correspondence::Normal,
-                CorrespondenceSpec::Radial => Correspondence::Radial {
-                    centre: spec.centre.ok_or("correspondence = \"radial\" needs a `centre` = [x, y]")?,
-                },
+                CorrespondenceSpec::Radial => {
+                    let c = spec.centre.as_ref().ok_or(format!("correspondence = \"radial\" needs a `centre` with {D} numbers"))?;
+                    let centre: [f64; D] = c.as_slice().try_into().map_err(|_| format!("field `centre`: expected {D} numbers, got {}", c.len()))?;
+                    Correspondence::Radial { centre }
+                }
             };
             let mode = match spec.mode.unwrap_or(ModeSpec::Sliding) {
                 ModeSpec::Sliding => MoveMode::Sliding,

@@ -5,14 +5,14 @@
 //! Outputs are produced in memory and written only when the run has
 //! succeeded, each file atomically, so a failed run leaves nothing behind.
 
-use crate::case::{CaseError, Setup};
-use crate::deform::{DeformError, Deformation, Integrator};
-use crate::io::msh::{msh_string, MshError};
-use crate::io::vtu::{vtu_string, VtuError};
+use crate::case::{AnySetup, CaseError, OutputSpec, Setup};
+use crate::deform::{DeformError, Deformation, Integrator, Q1Mesh};
+use crate::io::msh::{hex_msh_string, msh_string, MshError};
+use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::write_atomic;
-use crate::mesh::{quad_area, Point2, QuadMesh};
-use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
-use crate::render::{gif_bytes, png_bytes, render_mesh, RenderError, RenderOptions};
+use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
+use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
+use crate::render::{gif_bytes, png_bytes, render_hex, render_mesh, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -89,7 +89,7 @@ pub struct Timings {
 pub struct Report {
     /// Case name.
     pub case: String,
-    /// 2 for quads.
+    /// 2 for quads, 3 for hexes.
     pub dimension: usize,
     /// Cells.
     pub cells: usize,
@@ -138,23 +138,121 @@ pub struct Definitions {
     pub jf: &'static str,
 }
 
-/// The definitions used in every report.
-pub const DEFINITIONS: Definitions = Definitions {
-    det_j: "determinant of the bilinear map from the reference square [0,1]^2, at cell corners (Gmsh's [-1,1]^2 gives 1/4 of it)",
-    scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|), the sine of the corner angle",
-    jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2 Gauss); 1 is perfect",
-};
+/// What a kind of mesh writes and draws: the per-dimension end of a run.
+pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> {
+    /// What the figures mean.
+    const DEFINITIONS: Definitions;
+    /// Validity and shape figures.
+    fn quality(&self) -> MeshQuality;
+    /// Per-cell scaled Jacobians.
+    fn scaled_jacobians(&self) -> Vec<f64>;
+    /// Per-cell size at positions `nodes`.
+    fn cell_sizes(&self, nodes: &[[f64; D]]) -> Vec<f64>;
+    /// The MSH 4.1 text.
+    fn msh(&self) -> String;
+    /// The VTU text with cell data.
+    fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError>;
+    /// A picture of the mesh at positions `nodes`, cells coloured by
+    /// `values`.
+    fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
+}
+
+/// What every picture of one run shares, and its title and width.
+pub struct Look<'a, const D: usize> {
+    /// The world box around every frame.
+    pub bounds: ([f64; D], [f64; D]),
+    /// The colour range.
+    pub range: (f64, f64),
+    /// Title.
+    pub title: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// The case's output options (3D camera and clip).
+    pub output: &'a OutputSpec,
+}
+
+impl Outputs<2, 4> for QuadMesh {
+    const DEFINITIONS: Definitions = Definitions {
+        det_j: "determinant of the bilinear map from the reference square [0,1]^2, at cell corners (Gmsh's [-1,1]^2 gives 1/4 of it)",
+        scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|), the sine of the corner angle",
+        jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2 Gauss); 1 is perfect",
+    };
+    fn quality(&self) -> MeshQuality {
+        mesh_quality(self)
+    }
+    fn scaled_jacobians(&self) -> Vec<f64> {
+        (0..self.num_cells()).map(|c| scaled_jacobian(&self.cell_coords(c))).collect()
+    }
+    fn cell_sizes(&self, nodes: &[Point2]) -> Vec<f64> {
+        self.cells.iter().map(|c| quad_area(&c.map(|n| nodes[n]))).collect()
+    }
+    fn msh(&self) -> String {
+        msh_string(self)
+    }
+    fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
+        vtu_string(self, cell_data, &[])
+    }
+    fn draw(&self, nodes: &[Point2], values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
+        let m = QuadMesh { nodes: nodes.to_vec(), ..self.clone() };
+        let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), ..Default::default() };
+        render_mesh(&m, values, &opts)
+    }
+}
+
+impl Outputs<3, 8> for HexMesh {
+    const DEFINITIONS: Definitions = Definitions {
+        det_j: "determinant of the trilinear map from the reference cube [0,1]^3, bounded by its Bezier coefficients (Gmsh's [-1,1]^3 gives 1/8 of it)",
+        scaled_jacobian: "per cell, Verdict's hex scaled Jacobian: min over corners (and centre axes) of the triple product of unit edge vectors",
+        jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2x2 Gauss); 1 is perfect",
+    };
+    fn quality(&self) -> MeshQuality {
+        hex_mesh_quality(self)
+    }
+    fn scaled_jacobians(&self) -> Vec<f64> {
+        (0..self.num_cells()).map(|c| crate::hexquality::scaled_jacobian(&self.cell_coords(c))).collect()
+    }
+    fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
+        self.cells.iter().map(|c| crate::hexquality::hex_volume(&c.map(|n| nodes[n]))).collect()
+    }
+    fn msh(&self) -> String {
+        hex_msh_string(self)
+    }
+    fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
+        hex_vtu_string(self, cell_data, &[])
+    }
+    fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        let m = HexMesh { nodes: nodes.to_vec(), ..self.clone() };
+        let mut opts = RenderOptions3 { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), ..Default::default() };
+        if let Some(c) = look.output.camera {
+            opts.camera = Camera { azimuth_deg: c.azimuth, elevation_deg: c.elevation, distance: c.distance };
+        }
+        opts.clip = look.output.clip.map(|c| ClipPlane { point: c.point, normal: c.normal });
+        render_hex(&m, values, &opts)
+    }
+}
+
+/// Runs a prepared 2D or 3D case; writes into `out_dir` only on success.
+pub fn run_any(setup: AnySetup, out_dir: &Path, progress: impl FnMut(Progress)) -> Result<Report, RunError> {
+    match setup {
+        AnySetup::Quad(s) => run_setup(s, out_dir, progress),
+        AnySetup::Hex(s) => run_setup(s, out_dir, progress),
+    }
+}
 
 /// Runs a prepared case; writes into `out_dir` only on success.
-pub fn run_setup(setup: Setup, out_dir: &Path, mut progress: impl FnMut(Progress)) -> Result<Report, RunError> {
+pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
+    setup: Setup<M, D>,
+    out_dir: &Path,
+    mut progress: impl FnMut(Progress),
+) -> Result<Report, RunError> {
     let clock = Instant::now();
     let Setup { name, mesh, parts, field, options, output } = setup;
     let nominal_steps = options.steps;
     let integrator = options.integrator;
-    let mut def = Deformation::new(mesh, parts, field, options)?;
+    let mut def = Deformation::<M, D, N>::new(mesh, parts, field, options)?;
     // frames are drawn at the end, when the box around all of them is known
     let every = (nominal_steps / 40).max(1);
-    let snapshot = |d: &Deformation| (d.t, d.mesh.nodes.clone(), d.jf_now());
+    let snapshot = |d: &Deformation<M, D, N>| (d.t, d.mesh.nodes().to_vec(), d.jf_now());
     let mut stills = Vec::new();
     let mut anim = if output.animation { vec![snapshot(&def)] } else { Vec::new() };
     def.run(
@@ -167,39 +265,35 @@ pub fn run_setup(setup: Setup, out_dir: &Path, mut progress: impl FnMut(Progress
             progress(Progress { t: d.t, steps: d.stats.steps, halved: d.stats.halved });
         },
     )?;
-    let quality = mesh_quality(&def.mesh);
+    let quality = def.mesh.quality();
     if !quality.invalid_cells.is_empty() {
         return Err(RunError::Invalid(quality.invalid_cells));
     }
     let norm = def.normalisation_now()?;
     let ratios = def.jf_now()?;
-    let start_areas: Vec<f64> = (0..def.mesh.num_cells()).map(|c| quad_area(&def.mesh.cells[c].map(|n| def.start[n]))).collect();
-    let jf = jf_stats(&ratios, &start_areas);
+    let start_sizes = def.mesh.cell_sizes(&def.start);
+    let jf = jf_stats(&ratios, &start_sizes);
     let boundary_distance_max = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
 
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
-    files.push(("mesh.msh".into(), msh_string(&def.mesh).into_bytes()));
-    let scaled: Vec<f64> = (0..def.mesh.num_cells()).map(|c| scaled_jacobian(&def.mesh.cell_coords(c))).collect();
-    let vtu = vtu_string(&def.mesh, &[("J/f", &ratios), ("scaled_jacobian", &scaled), ("start_area", &start_areas)], &[])?;
+    files.push(("mesh.msh".into(), def.mesh.msh().into_bytes()));
+    let scaled = def.mesh.scaled_jacobians();
+    let vtu = def.mesh.vtu(&[("J/f", &ratios), ("scaled_jacobian", &scaled), ("start_size", &start_sizes)])?;
     files.push(("mesh.vtu".into(), vtu.into_bytes()));
-    let all_nodes = [&def.start, &def.mesh.nodes].into_iter().chain(stills.iter().chain(&anim).map(|s| &s.1));
-    let bounds = frame_bounds(all_nodes);
+    let all_nodes = [&def.start, &def.mesh.nodes().to_vec()].into_iter().cloned().chain(stills.iter().chain(&anim).map(|s| s.1.clone())).collect::<Vec<_>>();
+    let bounds = frame_bounds(all_nodes.iter());
     let range = symmetric_range(&ratios);
-    let draw = |nodes: &[Point2], values: &[f64], title: String, width: u32| -> Result<tiny_skia::Pixmap, RunError> {
-        let m = QuadMesh { nodes: nodes.to_vec(), ..def.mesh.clone() };
-        let opts = RenderOptions { width, bounds: Some(bounds), range: Some(range), title: Some(title), ..Default::default() };
-        Ok(render_mesh(&m, values, &opts)?)
-    };
-    let main_picture = draw(&def.mesh.nodes, &ratios, format!("{name}: J/f at t = 1"), output.width)?;
+    let look = |title: String, width: u32| Look { bounds, range, title, width, output: &output };
+    let main_picture = def.mesh.draw(def.mesh.nodes(), &ratios, &look(format!("{name}: J/f at t = 1"), output.width))?;
     files.push(("mesh.png".into(), png_bytes(&main_picture)?));
     for (t, nodes, values) in stills {
-        let picture = draw(&nodes, &values?, format!("t = {t:.2}"), output.width)?;
+        let picture = def.mesh.draw(&nodes, &values?, &look(format!("t = {t:.2}"), output.width))?;
         files.push((format!("frame_t{t:.2}.png"), png_bytes(&picture)?));
     }
     if output.animation {
         let frames = anim
             .into_iter()
-            .map(|(t, nodes, values)| draw(&nodes, &values?, format!("t = {t:.2}"), output.width.min(640)))
+            .map(|(t, nodes, values)| Ok(def.mesh.draw(&nodes, &values?, &look(format!("t = {t:.2}"), output.width.min(640)))?))
             .collect::<Result<Vec<_>, RunError>>()?;
         files.push(("deformation.gif".into(), gif_bytes(&frames, 8)?));
     }
@@ -207,9 +301,9 @@ pub fn run_setup(setup: Setup, out_dir: &Path, mut progress: impl FnMut(Progress
     let stats = def.stats.clone();
     let mut report = Report {
         case: name,
-        dimension: 2,
-        cells: def.mesh.num_cells(),
-        nodes: def.mesh.num_nodes(),
+        dimension: D,
+        cells: def.mesh.cells().len(),
+        nodes: def.mesh.nodes().len(),
         unknowns: def.num_unknowns(),
         integrator,
         nominal_steps,
@@ -218,7 +312,7 @@ pub fn run_setup(setup: Setup, out_dir: &Path, mut progress: impl FnMut(Progress
         solves: stats.solves,
         invalid_cells: quality.invalid_cells.len(),
         quality,
-        definitions: DEFINITIONS,
+        definitions: M::DEFINITIONS,
         jf,
         boundary_distance_max,
         normalisation_c: norm.c,
@@ -241,15 +335,13 @@ fn symmetric_range(values: &[f64]) -> (f64, f64) {
 }
 
 /// The box around all node sets, so frames align.
-fn frame_bounds<'a>(sets: impl Iterator<Item = &'a Vec<Point2>>) -> (Point2, Point2) {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for set in sets {
-        for p in set {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
+fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a Vec<[f64; D]>>) -> ([f64; D], [f64; D]) {
+    let mut lo = [f64::INFINITY; D];
+    let mut hi = [f64::NEG_INFINITY; D];
+    for p in sets.flatten() {
+        for k in 0..D {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
         }
     }
     (lo, hi)

@@ -5,6 +5,7 @@ pub mod deform;
 pub mod driver;
 pub mod expr;
 pub mod geometry;
+pub mod geometry3;
 pub mod hexquality;
 pub mod io;
 pub mod jacobian;

@@ -4,7 +4,8 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use deformesh::case::{Case, DEMO_CASE};
-use deformesh::driver::{run_setup, Progress, RunError};
+use deformesh::case::AnySetup;
+use deformesh::driver::{run_any, Progress, RunError};
 use deformesh::io::msh::MshError;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -72,21 +73,20 @@ fn run(cli: Cli) -> Result<()> {
         Command::Run { case, out } => {
             let parsed = Case::read(&case)?;
             let base = case.parent().unwrap_or(Path::new("."));
-            let setup = parsed.setup(&case.display().to_string(), base)?;
-            let out = out.unwrap_or_else(|| Path::new("out").join(&setup.name));
+            let setup = parsed.setup_any(&case.display().to_string(), base)?;
+            let name = match &setup {
+                AnySetup::Quad(s) => s.name.clone(),
+                AnySetup::Hex(s) => s.name.clone(),
+            };
+            let out = out.unwrap_or_else(|| Path::new("out").join(name));
             run_and_print(setup, &out).with_context(|| case.display().to_string())
         }
         Command::Demo { out } => {
-            let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup("<built-in demo>", Path::new("."))?;
+            let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out).context("<built-in demo>")
         }
         Command::Quality { mesh, json } => {
-            // an I/O error names the file itself; a parse error gives a line
-            let m = deformesh::io::msh::read_msh(&mesh).map_err(|e| match e {
-                MshError::Io { .. } => anyhow::Error::from(e),
-                other => anyhow::Error::from(other).context(mesh.display().to_string()),
-            })?;
-            let q = deformesh::quality::mesh_quality(&m);
+            let q = quality_of(&mesh)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&q)?);
             } else {
@@ -121,12 +121,11 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-fn run_and_print(setup: deformesh::case::Setup, out: &Path) -> Result<()> {
-    let name = setup.name.clone();
+fn run_and_print(setup: AnySetup, out: &Path) -> Result<()> {
     let bar = Bar::new();
-    let report = run_setup(setup, out, |p| bar.update(p)).map_err(anyhow::Error::from)?;
+    let report = run_any(setup, out, |p| bar.update(p)).map_err(anyhow::Error::from)?;
     bar.finish();
-    println!("case {name}: {} cells, {} nodes, {} steps ({} halved)", report.cells, report.nodes, report.steps, report.halved_steps);
+    println!("case {}: {} cells, {} nodes, {} steps ({} halved)", report.case, report.cells, report.nodes, report.steps, report.halved_steps);
     print!("{}", deformesh::quality::format_quality(&report.quality));
     println!("J/f: min {:.4}  max {:.4}  L2(J/f-1) {:.3e}", report.jf.min, report.jf.max, report.jf.l2_error);
     println!("boundary distance max: {:.3e}", report.boundary_distance_max);
@@ -174,5 +173,20 @@ impl Bar {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
         }
+    }
+}
+
+/// Quality figures of a quad or hex MSH file (hexes when it has any).
+fn quality_of(path: &Path) -> Result<deformesh::quality::MeshQuality> {
+    use deformesh::io::msh::{read_hex_msh, read_msh};
+    // an I/O error names the file itself; a parse error gives a line
+    let named = |e: MshError| match e {
+        MshError::Io { .. } => anyhow::Error::from(e),
+        other => anyhow::Error::from(other).context(path.display().to_string()),
+    };
+    match read_msh(path) {
+        Ok(m) => Ok(deformesh::quality::mesh_quality(&m)),
+        Err(MshError::UnknownElementType { element_type: 5, .. }) => Ok(deformesh::quality::hex_mesh_quality(&read_hex_msh(path).map_err(named)?)),
+        Err(e) => Err(named(e)),
     }
 }

@@ -15,7 +15,8 @@
 
 use crate::jacobian::{lift, JacobianField, Normalisation};
 use crate::lsfem::{gauss_points, q1_eval};
-use crate::mesh::{Point2, QuadMesh};
+use crate::hexquality::{det_j_bounds, hex_volume, invalid_hex_cells, scaled_jacobian as hex_scaled_jacobian};
+use crate::mesh::{HexMesh, Point2, QuadMesh};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -53,6 +54,28 @@ pub fn invalid_cells(mesh: &QuadMesh, nodes: &[Point2]) -> Vec<usize> {
         .collect()
 }
 
+/// Validity and shape figures of a hex mesh: det J bounds from the
+/// Bézier coefficients of each cell (reference [0,1]³; Gmsh's [−1,1]³
+/// gives 1/8), Verdict's hex scaled Jacobian, volumes, and the cells that
+/// are not certified valid.
+pub fn hex_mesh_quality(mesh: &HexMesh) -> MeshQuality {
+    let per_cell: Vec<((f64, f64), f64, f64)> = (0..mesh.num_cells())
+        .into_par_iter()
+        .map(|c| {
+            let p = mesh.cell_coords(c);
+            (det_j_bounds(&p), hex_scaled_jacobian(&p), hex_volume(&p))
+        })
+        .collect();
+    MeshQuality {
+        cells: mesh.num_cells(),
+        nodes: mesh.num_nodes(),
+        det_j: Range::of(per_cell.iter().flat_map(|c| [c.0 .0, c.0 .1])),
+        scaled_jacobian: Range::of(per_cell.iter().map(|c| c.1)),
+        invalid_cells: invalid_hex_cells(mesh, &mesh.nodes),
+        cell_size: Range::of(per_cell.iter().map(|c| c.2)),
+    }
+}
+
 /// Extremes over a set of values.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 pub struct Range {
@@ -82,8 +105,8 @@ pub struct MeshQuality {
     pub scaled_jacobian: Range,
     /// Cells whose det J is not positive somewhere.
     pub invalid_cells: Vec<usize>,
-    /// Smallest and largest cell area.
-    pub cell_area: Range,
+    /// Smallest and largest cell size (area in 2D, volume in 3D).
+    pub cell_size: Range,
 }
 
 /// Computes [`MeshQuality`].
@@ -101,7 +124,7 @@ pub fn mesh_quality(mesh: &QuadMesh) -> MeshQuality {
         det_j: Range::of(per_cell.iter().flat_map(|c| c.0)),
         scaled_jacobian: Range::of(per_cell.iter().map(|c| c.1)),
         invalid_cells: invalid_cells(mesh, &mesh.nodes),
-        cell_area: Range::of(per_cell.iter().map(|c| c.2)),
+        cell_size: Range::of(per_cell.iter().map(|c| c.2)),
     }
 }
 
@@ -187,9 +210,9 @@ mod tests {
 pub fn format_quality(q: &MeshQuality) -> String {
     format!(
         "cells {}  nodes {}\n\
-         det J (reference [0,1]^2): min {:.6e}  max {:.6e}\n\
-         scaled Jacobian (corner sine): min {:.4}  max {:.4}\n\
-         cell area: min {:.4e}  max {:.4e}\n\
+         det J (reference [0,1]^d): min {:.6e}  max {:.6e}\n\
+         scaled Jacobian: min {:.4}  max {:.4}\n\
+         cell size: min {:.4e}  max {:.4e}\n\
          invalid cells: {}{}\n",
         q.cells,
         q.nodes,
@@ -197,8 +220,8 @@ pub fn format_quality(q: &MeshQuality) -> String {
         q.det_j.max,
         q.scaled_jacobian.min,
         q.scaled_jacobian.max,
-        q.cell_area.min,
-        q.cell_area.max,
+        q.cell_size.min,
+        q.cell_size.max,
         q.invalid_cells.len(),
         if q.invalid_cells.is_empty() { String::new() } else { format!(" {:?}", &q.invalid_cells[..q.invalid_cells.len().min(20)]) }
     )

@@ -265,7 +265,7 @@ fn gmsh_agrees_with_the_report_of_a_run() {
         .setup("demo", Path::new("."))
         .unwrap();
     let out = dir.path().join("out");
-    let report = deformesh::driver::run_setup(setup, &out, |_| {}).unwrap();
+    let report = deformesh::driver::run_setup::<_, 2, 4>(setup, &out, |_| {}).unwrap();
     let gmsh = run_checker("check_msh.py", &out.join("mesh.msh"));
     let types = gmsh["element_types"].as_object().unwrap();
     assert_eq!(types["3"]["count"], 400);

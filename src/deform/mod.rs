@@ -536,3 +536,18 @@ impl From<DeformError> for StepFailure {
     }
 }
 
+
+impl BoundaryShape<3> for crate::geometry3::Surface {
+    fn closest_point(&self, p: [f64; 3]) -> [f64; 3] {
+        crate::geometry3::Surface::closest_point(self, p)
+    }
+    fn distance(&self, p: [f64; 3]) -> f64 {
+        crate::geometry3::Surface::distance(self, p)
+    }
+    fn normal(&self, p: [f64; 3]) -> [f64; 3] {
+        crate::geometry3::Surface::normal(self, p)
+    }
+    fn ray_hit(&self, origin: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
+        crate::geometry3::Surface::ray_hit(self, origin, dir)
+    }
+}
