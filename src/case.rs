@@ -79,6 +79,8 @@ pub enum CorrespondenceSpec {
     Radial,
     /// Closest point.
     Normal,
+    /// Along `direction`.
+    Along,
 }
 
 /// Move modes.
@@ -112,6 +114,9 @@ pub struct PartSpec {
     /// Centre of the radial correspondence.
     #[serde(default)]
     pub centre: Option<Vec<f64>>,
+    /// Direction of the `along` correspondence.
+    #[serde(default)]
+    pub direction: Option<Vec<f64>>,
     /// `sliding` (default) or `dirichlet`.
     #[serde(default)]
     pub mode: Option<ModeSpec>,
@@ -458,19 +463,33 @@ fn build_surface(v: &toml::Value) -> Result<Arc<dyn BoundaryShape<3>>, String> {
 /// belong together.
 fn part_kind<const D: usize>(spec: &PartSpec, build: fn(&toml::Value) -> Result<Arc<dyn BoundaryShape<D>>, String>) -> Result<PartKind<D>, String> {
     let shape = spec.shape.as_ref().map(build).transpose()?;
-    let move_only = spec.correspondence.is_some() || spec.centre.is_some() || spec.mode.is_some();
+    let move_only = spec.correspondence.is_some() || spec.centre.is_some() || spec.direction.is_some() || spec.mode.is_some();
     match spec.kind {
         PartKindSpec::Slip | PartKindSpec::Fixed if move_only => {
-            Err("fields `correspondence`, `centre` and `mode` belong to kind = \"move\"".into())
+            Err("fields `correspondence`, `centre`, `direction` and `mode` belong to kind = \"move\"".into())
         }
         PartKindSpec::Fixed if shape.is_some() => Err("kind = \"fixed\" takes no `shape`".into()),
         PartKindSpec::Fixed => Ok(PartKind::Fixed),
         PartKindSpec::Slip => Ok(PartKind::Slip { wall: shape }),
         PartKindSpec::Move => {
             let target = shape.ok_or("kind = \"move\" needs a `shape` (the target), e.g. shape = { type = \"circle\", centre = [0.0, 0.0], radius = 1.0 }")?;
-            let correspondence = match spec.correspondence.unwrap_or(CorrespondenceSpec::Normal) {
-                CorrespondenceSpec::Normal if spec.centre.is_some() => return Err("`centre` is only used with correspondence = \"radial\"".into()),
+            let which = spec.correspondence.unwrap_or(CorrespondenceSpec::Normal);
+            if spec.centre.is_some() && which != CorrespondenceSpec::Radial {
+                return Err("`centre` is only used with correspondence = \"radial\"".into());
+            }
+            if spec.direction.is_some() && which != CorrespondenceSpec::Along {
+                return Err("`direction` is only used with correspondence = \"along\"".into());
+            }
+            let correspondence = match which {
                 CorrespondenceSpec::Normal => Correspondence::Normal,
+                CorrespondenceSpec::Along => {
+                    let d = spec.direction.as_ref().ok_or(format!("correspondence = \"along\" needs a `direction` with {D} numbers"))?;
+                    let direction: [f64; D] = d.as_slice().try_into().map_err(|_| format!("field `direction`: expected {D} numbers, got {}", d.len()))?;
+                    if direction.iter().all(|&c| c == 0.0) || direction.iter().any(|c| !c.is_finite()) {
+                        return Err("field `direction`: must be a finite, non-zero vector".into());
+                    }
+                    Correspondence::Along { direction }
+                }
                 CorrespondenceSpec::Radial => {
                     let c = spec.centre.as_ref().ok_or(format!("correspondence = \"radial\" needs a `centre` with {D} numbers"))?;
                     let centre: [f64; D] = c.as_slice().try_into().map_err(|_| format!("field `centre`: expected {D} numbers, got {}", c.len()))?;

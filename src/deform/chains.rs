@@ -104,6 +104,10 @@ impl Chains {
                             centre[0], centre[1], p[0], p[1]
                         ),
                         Correspondence::Normal => format!("no closest point on the target for ({:.6}, {:.6})", p[0], p[1]),
+                        Correspondence::Along { direction } => format!(
+                            "the line through the boundary point ({:.6}, {:.6}) along ({}, {}) misses the target shape",
+                            p[0], p[1], direction[0], direction[1]
+                        ),
                     }));
                 };
                 images.push(x);
@@ -115,7 +119,11 @@ impl Chains {
                     let p = c.start(samples[j + 1]);
                     return Err(fail(format!(
                         "the {} correspondence folds back near the boundary point ({:.6}, {:.6}): its images on the target reverse direction (try correspondence = \"radial\" with a centre)",
-                        if matches!(correspondence, Correspondence::Normal) { "closest-point" } else { "radial" },
+                        match correspondence {
+                            Correspondence::Normal => "closest-point",
+                            Correspondence::Radial { .. } => "radial",
+                            Correspondence::Along { .. } => "along-a-direction",
+                        },
                         p[0],
                         p[1]
                     )));

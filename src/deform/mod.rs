@@ -68,6 +68,12 @@ pub enum Correspondence<const D: usize = 2> {
     },
     /// The closest point of the target.
     Normal,
+    /// Along a fixed direction: the nearer hit of the line through the
+    /// point (a wall of the box parallel to it stays in its plane).
+    Along {
+        /// The direction.
+        direction: [f64; D],
+    },
 }
 
 /// How a moving boundary imposes its motion.
@@ -118,6 +124,16 @@ impl<const D: usize> BoundaryPart<D> {
             PartKind::Move { target, correspondence, .. } => match correspondence {
                 Correspondence::Radial { centre } => target.ray_hit(*centre, std::array::from_fn(|i| p[i] - centre[i])),
                 Correspondence::Normal => Some(target.closest_point(p)),
+                Correspondence::Along { direction } => {
+                    let back = direction.map(|c| -c);
+                    let hits = [target.ray_hit(p, *direction), target.ray_hit(p, back)];
+                    let dist = |x: &[f64; D]| (0..D).map(|i| (x[i] - p[i]).powi(2)).sum::<f64>();
+                    // a point already on the target is its own image
+                    if target.distance(p) < 1e-14 {
+                        return Some(p);
+                    }
+                    hits.into_iter().flatten().min_by(|a, b| dist(a).total_cmp(&dist(b)))
+                }
             },
             _ => None,
         }
