@@ -283,3 +283,37 @@ fn gmsh_refines_loose_bezier_bounds_like_hex_is_valid() {
     );
     assert_eq!(invalid_hex_cells(&invalid, &invalid.nodes), vec![0]);
 }
+
+/// A whole 3D `run` (the quarter ball at 6³): Gmsh opens mesh.msh, finds
+/// every hex and the sphere and plane groups, judges every hex valid, and
+/// its extreme Jacobian determinants agree with report.json's (÷ 8).
+#[test]
+fn gmsh_agrees_with_the_report_of_a_3d_run() {
+    use deformesh::case::{AnySetup, Case};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/quarter_ball.toml");
+    let mut case = Case::read(&path).unwrap();
+    case.mesh.cells = vec![6, 6, 6];
+    case.output.animation = false;
+    case.output.frames.clear();
+    let AnySetup::Hex(setup) = case.setup_any("quarter_ball", Path::new(".")).unwrap() else { panic!("3D case") };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let report = deformesh::driver::run_setup::<_, 3, 8>(setup, &out, |_| {}).unwrap();
+    assert_eq!(report.invalid_cells, 0);
+    let gmsh = run_checker("check_msh.py", &out.join("mesh.msh"));
+    let types = gmsh["element_types"].as_object().unwrap();
+    assert_eq!(types["5"]["count"], 216);
+    assert_eq!(types["3"]["count"], 6 * 36);
+    assert_eq!(gmsh["physical_names"]["2"], serde_json::json!(["planes", "sphere"]));
+    let h = &gmsh["elements_3d"];
+    let (min_dj, max_dj, min_sj) = (floats(&h["minDetJac"]), floats(&h["maxDetJac"]), floats(&h["minSJ"]));
+    assert!(min_dj.iter().chain(&min_sj).all(|&v| v > 0.0), "Gmsh finds an invalid hex");
+    let gmsh_min = min_dj.iter().copied().fold(f64::INFINITY, f64::min);
+    let gmsh_max = max_dj.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (ours_min, ours_max) = (report.quality.det_j.min / 8.0, report.quality.det_j.max / 8.0);
+    eprintln!("minDetJac: Gmsh {gmsh_min:e}, ours/8 {ours_min:e}; maxDetJac: Gmsh {gmsh_max:e}, ours/8 {ours_max:e}");
+    assert!(rel(gmsh_min, ours_min) < 1e-3 && rel(gmsh_max, ours_max) < 1e-3, "Gmsh [{gmsh_min}, {gmsh_max}] vs ours/8 [{ours_min}, {ours_max}]");
+    let vtk = run_checker("check_vtu.py", &out.join("mesh.vtu"));
+    assert_eq!(vtk["num_cells"], 216);
+    assert_eq!(vtk["cell_arrays"]["J/f"], 1);
+}

@@ -132,7 +132,10 @@ impl<const D: usize> BoundaryPart<D> {
                     if target.distance(p) < 1e-14 {
                         return Some(p);
                     }
-                    hits.into_iter().flatten().min_by(|a, b| dist(a).total_cmp(&dist(b)))
+                    let hit = hits.into_iter().flatten().min_by(|a, b| dist(a).total_cmp(&dist(b)))?;
+                    // coordinates across which the line does not move stay
+                    // exact: a node on an axis-aligned wall stays on it
+                    Some(std::array::from_fn(|i| if direction[i] == 0.0 { p[i] } else { hit[i] }))
                 }
             },
             _ => None,

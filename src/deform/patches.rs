@@ -326,8 +326,13 @@ impl BoundaryModel<3> for Patches {
                     nodes[i] = p;
                     self.roles[i] = Role3::Face { patch, s };
                 }
+                Role3::Edge { edge, sigma } if self.edge_is_fixed(edge) => {
+                    // on its path from its exact start
+                    let v = self.edge_velocity(edge, sigma);
+                    nodes[i] = std::array::from_fn(|k| self.start[i][k] + t * v[k]);
+                }
                 Role3::Edge { edge, sigma } => {
-                    let sigma = if self.edge_is_fixed(edge) { sigma } else { self.project_on_edge(edge, sigma, nodes[i], t) };
+                    let sigma = self.project_on_edge(edge, sigma, nodes[i], t);
                     nodes[i] = self.edge_point(edge, sigma, t);
                     self.roles[i] = Role3::Edge { edge, sigma };
                 }

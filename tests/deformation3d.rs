@@ -1,0 +1,127 @@
+//! Algorithm 1 on hexahedral meshes: the seed's 3D figures, with the
+//! figures the issue asks for.
+
+use deformesh::case::{AnySetup, Case, Setup};
+use deformesh::deform::Deformation3;
+use deformesh::hexquality::{corner_det_j, det_j};
+use deformesh::lsfem::gauss_points;
+use deformesh::mesh::HexMesh;
+use deformesh::quality::hex_mesh_quality;
+use std::path::Path;
+
+fn setup(file: &str, edit: impl Fn(&mut Case)) -> Setup<HexMesh, 3> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(file);
+    let mut case = Case::read(&path).unwrap();
+    edit(&mut case);
+    match case.setup_any(file, path.parent().unwrap()).unwrap() {
+        AnySetup::Hex(s) => s,
+        AnySetup::Quad(_) => panic!("{file} is not 3D"),
+    }
+}
+
+fn run(s: Setup<HexMesh, 3>) -> Deformation3 {
+    let mut d = Deformation3::new(s.mesh, s.parts, s.field, s.options).unwrap();
+    d.run(&[], |_| {}, |_| {}).unwrap();
+    d
+}
+
+/// Every cell valid by the Bézier certificate, and det J > 0 at its eight
+/// corners and eight Gauss points.
+fn assert_valid(d: &Deformation3) {
+    let q = hex_mesh_quality(&d.mesh);
+    assert!(q.invalid_cells.is_empty(), "invalid cells {:?}", q.invalid_cells);
+    for c in 0..d.mesh.num_cells() {
+        let p = d.mesh.cell_coords(c);
+        assert!(corner_det_j(&p).iter().all(|&v| v > 0.0), "cell {c} corner");
+        assert!(gauss_points::<3>().all(|(xi, _)| det_j(&p, xi) > 0.0), "cell {c} Gauss point");
+    }
+}
+
+fn assert_on_targets(d: &Deformation3) -> usize {
+    let dists = d.boundary_distances();
+    for &(i, dist) in &dists {
+        assert!(dist < 1e-10, "node {i} at {:?} is {dist:e} off its target", d.mesh.nodes[i]);
+    }
+    dists.len()
+}
+
+#[test]
+fn quarter_ball_12_is_valid_on_the_sphere_and_near_f() {
+    let d = run(setup("quarter_ball.toml", |c| c.mesh.cells = vec![12, 12, 12]));
+    assert_valid(&d);
+    // nodes on the three moving faces: 13³ − 12³
+    assert_eq!(assert_on_targets(&d), 13 * 13 * 13 - 12 * 12 * 12);
+    for (p, s) in d.mesh.nodes.iter().zip(&d.start) {
+        let r = p[0].hypot(p[1]).hypot(p[2]);
+        if s.iter().any(|&c| c == 1.0) {
+            assert!((r - 1.25).abs() < 1e-10, "sphere node {s:?} at radius {r}");
+        }
+        for k in 0..3 {
+            if s[k] == 0.0 {
+                assert_eq!(p[k], 0.0, "slip node {s:?} left its plane");
+            }
+        }
+    }
+    // J/f outside a band of width 0.25 along the three edges on the sphere
+    let jf = d.jf_now().unwrap();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (c, cell) in d.mesh.cells.iter().enumerate() {
+        let centre: Vec<f64> = (0..3).map(|k| cell.iter().map(|&v| d.start[v][k]).sum::<f64>() / 8.0).collect();
+        if centre.iter().filter(|&&x| x > 0.75).count() <= 1 {
+            lo = lo.min(jf[c]);
+            hi = hi.max(jf[c]);
+        }
+    }
+    // measured [0.984, 1.067]; everywhere [0.799, 1.070]
+    assert!(lo >= 0.8 && hi <= 1.2, "J/f outside the edge band in [{lo}, {hi}]");
+    let all = jf.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    assert!(all > 0.7, "the gliding edges keep even the corner cell near f: min J/f {all}");
+}
+
+#[test]
+fn horn_and_ellipsoid_are_valid_and_on_their_surfaces() {
+    let horn = run(setup("horn.toml", |c| c.mesh.cells = vec![6, 6, 12]));
+    assert_valid(&horn);
+    assert!(assert_on_targets(&horn) > 0);
+    let ellipsoid = run(setup("ellipsoid.toml", |c| c.mesh.cells = vec![8, 6, 4]));
+    assert_valid(&ellipsoid);
+    assert!(assert_on_targets(&ellipsoid) > 0);
+    for p in &ellipsoid.mesh.nodes {
+        let f = (p[0] / 1.5).powi(2) + (p[1] / 1.0).powi(2) + (p[2] / 0.75).powi(2);
+        assert!(f <= 1.0 + 1e-12, "node {p:?} outside the ellipsoid");
+    }
+}
+
+#[test]
+fn cube_on_ball_takes_the_ball_shape() {
+    let d = run(setup("cube_on_ball.toml", |c| c.mesh.cells = vec![6, 6, 6]));
+    assert_valid(&d);
+    for (p, s) in d.mesh.nodes.iter().zip(&d.start) {
+        if s[2] == 0.0 {
+            // onto the sphere of radius 1.7 about (0, 0, −1.5)
+            let r = p[0].hypot(p[1]).hypot(p[2] + 1.5);
+            assert!((r - 1.7).abs() < 1e-10, "bottom node {s:?} at {p:?}");
+        }
+        for k in 0..2 {
+            if s[k].abs() == 0.5 {
+                assert_eq!(p[k], s[k], "node {s:?} left its side wall");
+            }
+        }
+        if s[2] == 1.0 {
+            assert_eq!(p, s, "the top is fixed");
+        }
+    }
+}
+
+#[test]
+fn an_unreachable_target_names_the_part() {
+    // rays from the origin miss a small sphere far away
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/quarter_ball.toml"))
+        .unwrap()
+        .replace("centre = [0.0, 0.0, 0.0], radius = 1.25", "centre = [10.0, 10.0, 10.0], radius = 1.0");
+    let case = Case::parse(&text, "far.toml").unwrap();
+    let AnySetup::Hex(s) = case.setup_any("far.toml", Path::new(".")).unwrap() else { panic!() };
+    let err = Deformation3::new(s.mesh, s.parts, s.field, s.options).err().expect("an error");
+    let msg = err.to_string();
+    assert!(msg.contains("`sphere`") && msg.contains("cannot be reached"), "{msg}");
+}
