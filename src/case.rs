@@ -45,6 +45,9 @@ pub struct Case {
     /// What to write.
     #[serde(default)]
     pub output: OutputSpec,
+    /// The text it was parsed from (for line numbers in errors).
+    #[serde(skip)]
+    pub source: String,
 }
 
 /// A structured box mesh: a rectangle (two numbers each) or a brick (three).
@@ -107,7 +110,7 @@ pub struct PartSpec {
     /// Target (move) or wall (slip; default: the side itself): a curve
     /// ([`ShapeSpec`]) in 2D, a surface ([`SurfaceSpec`]) in 3D.
     #[serde(default)]
-    pub shape: Option<toml::Value>,
+    pub shape: Option<toml::Spanned<toml::Value>>,
     /// `radial` (needs `centre`) or `normal` (default).
     #[serde(default)]
     pub correspondence: Option<CorrespondenceSpec>,
@@ -282,7 +285,17 @@ impl Case {
 
     /// Parses case text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Case, CaseError> {
-        toml::from_str(text).map_err(|e| CaseError { file: file.to_string(), message: e.to_string().trim_end().to_string() })
+        let mut case: Case = toml::from_str(text).map_err(|e| CaseError { file: file.to_string(), message: e.to_string().trim_end().to_string() })?;
+        case.source = text.to_string();
+        Ok(case)
+    }
+
+    /// "line N: " for a byte offset of the source, if known.
+    fn line_of(&self, offset: usize) -> String {
+        if self.source.len() < offset {
+            return String::new();
+        }
+        format!("line {}: ", self.source[..offset].matches('\n').count() + 1)
     }
 
     /// The number of dimensions (2 or 3), from the mesh table.
@@ -398,7 +411,8 @@ impl Case {
                 }
                 side_part[s] = parts.len();
             }
-            let kind = part_kind(spec, build).map_err(|m| err(format!("{here}: {m}")))?;
+            let line = spec.shape.as_ref().map_or(String::new(), |v| self.line_of(v.span().start));
+            let kind = part_kind(spec, build).map_err(|m| err(format!("{line}{here}: {m}")))?;
             parts.push(BoundaryPart { name: spec.name.clone(), kind });
         }
         // sides nobody named stay slip walls under their own name
@@ -462,7 +476,7 @@ fn build_surface(v: &toml::Value) -> Result<Arc<dyn BoundaryShape<3>>, String> {
 /// Translates one part's spec into its kind, checking the fields that
 /// belong together.
 fn part_kind<const D: usize>(spec: &PartSpec, build: fn(&toml::Value) -> Result<Arc<dyn BoundaryShape<D>>, String>) -> Result<PartKind<D>, String> {
-    let shape = spec.shape.as_ref().map(build).transpose()?;
+    let shape = spec.shape.as_ref().map(|v| build(v.get_ref())).transpose()?;
     let move_only = spec.correspondence.is_some() || spec.centre.is_some() || spec.direction.is_some() || spec.mode.is_some();
     match spec.kind {
         PartKindSpec::Slip | PartKindSpec::Fixed if move_only => {
