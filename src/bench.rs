@@ -1,8 +1,8 @@
 //! Scaling measurements of one pseudo-time step (`deformesh bench` and the
 //! criterion bench): the quarter-disk problem on an n×n box, timed by phase.
 
-use crate::case::{Case, DEMO_CASE};
-use crate::deform::Deformation;
+use crate::case::{AnySetup, Case, DEMO_CASE};
+use crate::deform::{Deformation, Deformation3, Q1Mesh};
 use std::path::Path;
 
 /// Seconds of one step by phase, best of the repetitions.
@@ -36,11 +36,46 @@ pub fn demo_deformation(n: usize) -> Result<Deformation, Box<dyn std::error::Err
     Ok(Deformation::new(s.mesh, s.parts, s.field, s.options)?)
 }
 
-/// Times `repeat` first steps of the demo case at n×n cells.
+/// The quarter-ball case (`cases/quarter_ball.toml`) at n³ cells.
+pub const QUARTER_BALL: &str = include_str!("../cases/quarter_ball.toml");
+
+/// Prepares the quarter ball at n×n×n cells with one nominal step.
+pub fn ball_deformation(n: usize) -> Result<Deformation3, Box<dyn std::error::Error + Send + Sync>> {
+    let mut case = Case::parse(QUARTER_BALL, "<quarter ball>")?;
+    case.mesh.cells = vec![n, n, n];
+    case.time.steps = 100;
+    match case.setup_any("<quarter ball>", Path::new("."))? {
+        AnySetup::Hex(s) => Ok(Deformation3::new(s.mesh, s.parts, s.field, s.options)?),
+        AnySetup::Quad(_) => unreachable!("the quarter ball is 3D"),
+    }
+}
+
+/// Times `repeat` first steps of the 2D demo case at n×n cells.
 pub fn one_step(n: usize, repeat: usize) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+    time_steps(repeat, || demo_deformation(n))
+}
+
+/// Times `repeat` first steps of the quarter ball at n³ cells.
+pub fn one_step_3d(n: usize, repeat: usize) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+    time_steps(repeat, || ball_deformation(n))
+}
+
+/// Peak resident memory of this process so far, in MiB (Linux; None
+/// elsewhere).
+pub fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+fn time_steps<M: Q1Mesh<D, N>, const D: usize, const N: usize>(
+    repeat: usize,
+    prepare: impl Fn() -> Result<Deformation<M, D, N>, Box<dyn std::error::Error + Send + Sync>>,
+) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
     let mut best: Option<StepTiming> = None;
     for _ in 0..repeat.max(1) {
-        let mut d = demo_deformation(n)?;
+        let mut d = prepare()?;
         d.step(0.01)?;
         let t = StepTiming {
             unknowns: d.num_unknowns(),

@@ -50,6 +50,9 @@ enum Command {
         /// Repetitions per size (the best is reported).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
+        /// 2: the quarter disk on n² quads; 3: the quarter ball on n³ hexes.
+        #[arg(long, default_value_t = 2)]
+        dim: usize,
     },
 }
 
@@ -97,23 +100,26 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { sizes, repeat } => {
+        Command::Bench { sizes, repeat, dim } => {
+            anyhow::ensure!(dim == 2 || dim == 3, "--dim must be 2 or 3, got {dim}");
             println!(
-                "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>13} {:>11}",
-                "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "us/unknown", "analyse_s"
+                "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>13} {:>11} {:>12}",
+                "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "us/unknown", "analyse_s", "peak_MiB"
             );
             for n in sizes {
-                let b = deformesh::bench::one_step(n, repeat).map_err(|e| anyhow::anyhow!(e))?;
+                let b = if dim == 2 { deformesh::bench::one_step(n, repeat) } else { deformesh::bench::one_step_3d(n, repeat) };
+                let b = b.map_err(|e| anyhow::anyhow!(e))?;
                 println!(
-                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>13.3} {:>11.4}",
-                    format!("{n}²"),
+                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>13.3} {:>11.4} {:>12}",
+                    format!("{n}{}", if dim == 2 { "²" } else { "³" }),
                     b.unknowns,
                     b.assemble_s,
                     b.factor_s,
                     b.solve_s,
                     b.step_s(),
                     1e6 * b.step_s() / b.unknowns as f64,
-                    b.analyze_s
+                    b.analyze_s,
+                    deformesh::bench::peak_memory_mib().map_or("n/a".to_string(), |m| format!("{m:.0}"))
                 );
             }
             Ok(())
