@@ -207,3 +207,34 @@ fn a_folding_correspondence_is_an_error_naming_the_part() {
     let msg = err.to_string();
     assert!(msg.contains("`outer`") && (msg.contains("jumps") || msg.contains("folds")), "{msg}");
 }
+
+#[test]
+fn a_curved_slip_wall_keeps_its_nodes() {
+    // deform onto the quarter disk, then adapt the result with the arc as a
+    // curved slip wall: cells crowd towards x = 0 and the arc nodes glide
+    use deformesh::deform::{BoundaryPart, BoundaryShape, PartKind};
+    use deformesh::geometry::ShapeSpec;
+    use std::sync::Arc;
+    let first = quarter_disk("sliding");
+    let circle: Arc<dyn BoundaryShape<2>> = Arc::new(ShapeSpec::Circle { centre: [0.0, 0.0], radius: 1.25 }.build().unwrap());
+    let parts = vec![
+        BoundaryPart { name: "axes".into(), kind: PartKind::Slip { wall: None } },
+        BoundaryPart { name: "arc".into(), kind: PartKind::Slip { wall: Some(circle) } },
+    ];
+    let field = JacobianField::expression(Expr::parse("0.2 + x", &deformesh::jacobian::EXPR_VARS).unwrap());
+    let options = deformesh::deform::DeformOptions { steps: 20, ..Default::default() };
+    let mut d = Deformation::new(first.mesh.clone(), parts, field, options).unwrap();
+    d.run(&[], |_| {}, |_| {}).unwrap();
+    assert!(mesh_quality(&d.mesh).invalid_cells.is_empty());
+    let mut moved = 0.0f64;
+    for (p, s) in d.mesh.nodes.iter().zip(&d.start) {
+        if (s[0].hypot(s[1]) - 1.25).abs() < 1e-10 {
+            assert!((p[0].hypot(p[1]) - 1.25).abs() < 1e-10, "arc node left the wall: {p:?}");
+            moved = moved.max((p[0] - s[0]).hypot(p[1] - s[1]));
+        }
+    }
+    assert!(moved > 1e-3, "arc nodes glide along the wall (largest move {moved})");
+    let jf = d.jf_now().unwrap();
+    let r = jf_stats(&jf, &vec![1.0; jf.len()]);
+    assert!(r.min > 0.8 && r.max < 1.25, "J/f in [{}, {}]", r.min, r.max);
+}

@@ -125,3 +125,65 @@ fn an_unreachable_target_names_the_part() {
     let msg = err.to_string();
     assert!(msg.contains("`sphere`") && msg.contains("cannot be reached"), "{msg}");
 }
+
+fn brick_onto(shape: &str, correspondence: &str, extra: &str) -> Setup<HexMesh, 3> {
+    let text = format!(
+        "[mesh]\nlower = [-0.5, -0.5, 0.0]\nupper = [0.5, 0.5, 1.0]\ncells = [6, 6, 6]\n\
+         [[boundary]]\nname = \"target\"\nsides = [\"xmin\", \"xmax\", \"ymin\", \"ymax\"]\nkind = \"move\"\n\
+         shape = {shape}\n{correspondence}\n{extra}\n[time]\nsteps = 12\n"
+    );
+    match Case::parse(&text, "brick").unwrap().setup_any("brick", Path::new(".")).unwrap() {
+        AnySetup::Hex(s) => s,
+        AnySetup::Quad(_) => unreachable!(),
+    }
+}
+
+#[test]
+fn cylinder_and_superquadric_targets_and_plane_walls() {
+    // the four sides onto a cylinder about z (closest points keep z, so the
+    // end faces stay in their planes, given here as explicit plane walls)
+    let walls = "[[boundary]]\nname = \"ends\"\nsides = [\"zmin\"]\nkind = \"slip\"\n\
+                 shape = { type = \"plane\", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, -1.0] }\n";
+    let d = run(brick_onto("{ type = \"cylinder\", point = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0], radius = 0.6 }", "correspondence = \"normal\"", walls));
+    assert_valid(&d);
+    assert!(assert_on_targets(&d) > 0);
+    for (p, s) in d.mesh.nodes.iter().zip(&d.start) {
+        if s[2] == 0.0 {
+            assert!(p[2].abs() < 1e-15, "node {s:?} left the plane wall: {p:?}");
+        }
+    }
+    // a superquadric seen from its centre (radial), all six faces moving
+    let text = "[mesh]\nlower = [-0.5, -0.5, -0.5]\nupper = [0.5, 0.5, 0.5]\ncells = [6, 6, 6]\n\
+        [[boundary]]\nname = \"blob\"\nsides = [\"xmin\", \"xmax\", \"ymin\", \"ymax\", \"zmin\", \"zmax\"]\nkind = \"move\"\n\
+        shape = { type = \"superquadric\", centre = [0.0, 0.0, 0.0], semi_axes = [0.7, 0.6, 0.5], exponent = 3.0 }\n\
+        correspondence = \"radial\"\ncentre = [0.0, 0.0, 0.0]\n[time]\nsteps = 12\n";
+    let AnySetup::Hex(s) = Case::parse(text, "blob").unwrap().setup_any("blob", Path::new(".")).unwrap() else { panic!() };
+    let d = run(s);
+    assert_valid(&d);
+    assert_eq!(assert_on_targets(&d), 7 * 7 * 7 - 5 * 5 * 5);
+}
+
+#[test]
+fn expression_field_in_3d_is_normalised() {
+    // cells crowd towards the bottom: f small where z is small
+    let s = setup("quarter_ball.toml", |c| {
+        c.mesh.cells = vec![6, 6, 6];
+        c.jacobian = deformesh::case::JacobianSpec::Expression { f: "0.5 + z".into(), path: Default::default() };
+    });
+    let d = run(s);
+    assert_valid(&d);
+    let norm = d.normalisation_now().unwrap();
+    let field = deformesh::jacobian::JacobianField::expression(deformesh::expr::Expr::parse("0.5 + z", &deformesh::jacobian::EXPR_VARS).unwrap());
+    let mut integral = 0.0;
+    for c in 0..d.mesh.num_cells() {
+        let p = d.mesh.cell_coords(c);
+        for (xi, w) in gauss_points::<3>() {
+            let (x, det, _) = deformesh::lsfem::q1_eval(&p, xi);
+            integral += w * det / norm.f(&field, x);
+        }
+    }
+    assert!((integral - 1.0).abs() < 1e-12, "∫ 1/f = {integral}, |Ω₀| = 1");
+    // and the bottom layer of cells is smaller than the top one
+    let jf = d.jf_now().unwrap();
+    assert!(jf.iter().all(|&r| r > 0.7 && r < 1.3), "J/f range");
+}
