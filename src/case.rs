@@ -251,6 +251,9 @@ impl Default for OutputSpec {
     }
 }
 
+/// The largest starting mesh a case may ask for, in nodes.
+pub const MAX_NODES: usize = 50_000_000;
+
 /// A case translated into what the method needs, for a mesh `M` in D
 /// dimensions.
 pub struct Setup<M = QuadMesh, const D: usize = 2> {
@@ -333,7 +336,14 @@ impl Case {
         if m.cells.contains(&0) {
             return Err(err("field `mesh.cells`: every count must be at least 1".into()));
         }
-        if (0..dim).any(|k| !(m.upper[k] > m.lower[k])) {
+        let nodes = m.cells.iter().try_fold(1usize, |acc, &n| acc.checked_mul(n.checked_add(1)?));
+        if nodes.is_none_or(|n| n > MAX_NODES) {
+            return Err(err(format!("field `mesh.cells`: {:?} cells is more than this tool handles (at most {MAX_NODES} nodes)", m.cells)));
+        }
+        if m.lower.iter().chain(&m.upper).any(|v| !v.is_finite()) {
+            return Err(err("fields `mesh.lower`/`mesh.upper`: must be finite numbers".into()));
+        }
+        if (0..dim).any(|k| m.upper[k] <= m.lower[k]) {
             return Err(err("fields `mesh.lower`/`mesh.upper`: upper must exceed lower along every axis".into()));
         }
         if self.time.steps == 0 {
@@ -355,6 +365,10 @@ impl Case {
         let mut output = self.output.clone();
         output.frames.sort_by(f64::total_cmp);
         output.frames.dedup();
+        // frames are files named by t to two decimals: those must differ
+        if let Some(w) = output.frames.windows(2).find(|w| format!("{:.2}", w[0]) == format!("{:.2}", w[1])) {
+            return Err(err(format!("field `output.frames`: {} and {} would both be written as frame_t{:.2}.png", w[0], w[1], w[0])));
+        }
         let name = self.name.clone().unwrap_or_else(|| Path::new(file).file_stem().map_or("case".into(), |s| s.to_string_lossy().into_owned()));
         let options = DeformOptions { steps: self.time.steps, integrator: self.time.integrator, div_weight: self.time.div_weight, ..Default::default() };
         if dim == 2 {
@@ -507,6 +521,9 @@ fn part_kind<const D: usize>(spec: &PartSpec, build: fn(&toml::Value) -> Result<
                 CorrespondenceSpec::Radial => {
                     let c = spec.centre.as_ref().ok_or(format!("correspondence = \"radial\" needs a `centre` with {D} numbers"))?;
                     let centre: [f64; D] = c.as_slice().try_into().map_err(|_| format!("field `centre`: expected {D} numbers, got {}", c.len()))?;
+                    if centre.iter().any(|v| !v.is_finite()) {
+                        return Err("field `centre`: must be finite numbers".into());
+                    }
                     Correspondence::Radial { centre }
                 }
             };

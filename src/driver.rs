@@ -347,12 +347,24 @@ fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a Vec<[f64; D]>
     (lo, hi)
 }
 
-/// Creates the folder and writes every file atomically.
+/// Creates the folder and writes every file: first all under temporary
+/// names (removed again if any write fails), then renamed into place, so
+/// a failure leaves no partial set of outputs.
 fn write_all(out_dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), RunError> {
-    std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write { path: out_dir.to_path_buf(), source })?;
-    for (name, bytes) in files {
-        let path = out_dir.join(name);
-        write_atomic(&path, bytes).map_err(|source| RunError::Write { path, source })?;
+    let fail = |path: PathBuf| move |source| RunError::Write { path, source };
+    std::fs::create_dir_all(out_dir).map_err(fail(out_dir.to_path_buf()))?;
+    let staged: Vec<(PathBuf, PathBuf)> = files
+        .iter()
+        .map(|(name, _)| (out_dir.join(format!(".{name}.staged-{}", std::process::id())), out_dir.join(name)))
+        .collect();
+    for (k, ((tmp, _), (_, bytes))) in staged.iter().zip(files).enumerate() {
+        if let Err(e) = write_atomic(tmp, bytes) {
+            staged[..k].iter().for_each(|(t, _)| drop(std::fs::remove_file(t)));
+            return Err(fail(tmp.clone())(e));
+        }
+    }
+    for (tmp, path) in &staged {
+        std::fs::rename(tmp, path).map_err(fail(path.clone()))?;
     }
     Ok(())
 }

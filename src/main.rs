@@ -81,7 +81,7 @@ fn run(cli: Cli) -> Result<()> {
                 AnySetup::Quad(s) => s.name.clone(),
                 AnySetup::Hex(s) => s.name.clone(),
             };
-            let out = out.unwrap_or_else(|| Path::new("out").join(name));
+            let out = out.unwrap_or_else(|| Path::new("out").join(folder_name(&name)));
             run_and_print(setup, &out).with_context(|| case.display().to_string())
         }
         Command::Demo { out } => {
@@ -180,6 +180,12 @@ impl Bar {
             b.finish_and_clear();
         }
     }
+}
+
+/// A case name made safe as one folder name under `out/`.
+fn folder_name(name: &str) -> String {
+    let safe: String = name.chars().map(|c| if c.is_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
+    if safe.trim_matches('.').is_empty() { "case".into() } else { safe }
 }
 
 /// Quality figures of a quad or hex MSH file (hexes when it has any).

@@ -123,11 +123,6 @@ impl CholeskySolver {
             par,
         }
     }
-
-    /// Number of stored values in the factor (a measure of fill-in).
-    pub fn factor_nnz(&self) -> usize {
-        self.l_values.len()
-    }
 }
 
 impl Default for CholeskySolver {

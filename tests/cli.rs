@@ -293,3 +293,37 @@ fn demo_writes_frames_and_animation() {
     assert!(std::fs::read(out.join("deformation.gif")).unwrap().starts_with(b"GIF89a"));
     assert_eq!(read_json(&out.join("report.json"))["invalid_cells"], 0);
 }
+
+#[test]
+fn too_many_cells() {
+    let text = edit(SMALL, "cells = [6, 6]", "cells = [4000000000, 4000000000]");
+    run_bad_case(&text, &[CASE, "field `mesh.cells`", "more than this tool handles"]);
+}
+
+#[test]
+fn infinite_bounds() {
+    let text = edit(SMALL, "upper = [1.0, 1.0]", "upper = [inf, 1.0]");
+    run_bad_case(&text, &[CASE, "must be finite"]);
+}
+
+#[test]
+fn frames_with_one_file_name() {
+    let text = format!("{SMALL}\n[output]\nframes = [0.301, 0.304]\n");
+    run_bad_case(&text, &[CASE, "field `output.frames`", "frame_t0.30.png"]);
+}
+
+#[test]
+fn mismatched_dimensions() {
+    let text = edit(SMALL, "cells = [6, 6]", "cells = [6, 6, 6]");
+    run_bad_case(&text, &[CASE, "expected two numbers each (2D) or three each (3D)"]);
+}
+
+#[test]
+fn a_case_name_cannot_leave_the_output_folder() {
+    let dir = TempDir::new().unwrap();
+    let text = edit(SMALL, "name = \"small\"", "name = \"../../escaped\"");
+    write_case(dir.path(), &text);
+    let ran = deformesh(dir.path(), &["run", CASE]);
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+    assert!(dir.path().join("out").join(".._.._escaped").join("report.json").exists(), "{:?}", files_in(&dir.path().join("out")));
+}

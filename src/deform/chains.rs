@@ -168,7 +168,13 @@ impl Chains {
         };
         let (pa, pb) = (self.chain_point(chain, a, t), self.chain_point(chain, b, t));
         // chains run with the domain on their left: outward is the right
-        let tan = [pb[0] - pa[0], pb[1] - pa[1]];
+        let mut tan = [pb[0] - pa[0], pb[1] - pa[1]];
+        if tan[0] == 0.0 && tan[1] == 0.0 {
+            // Γ_t collapses here: fall back on the starting chain's direction
+            let c = &self.chains[chain];
+            let (qa, qb) = (c.start(a), c.start(b));
+            tan = [qb[0] - qa[0], qb[1] - qa[1]];
+        }
         let len = tan[0].hypot(tan[1]);
         [tan[1] / len, -tan[0] / len]
     }
@@ -252,6 +258,9 @@ impl Chains {
             let (pa, pb) = (self.chain_point(chain, a, t), self.chain_point(chain, b, t));
             let d = [(pb[0] - pa[0]) / (b - a), (pb[1] - pa[1]) / (b - a)];
             let dd = d[0] * d[0] + d[1] * d[1];
+            if !(dd > 0.0) {
+                break; // the curve collapses here: keep the last parameter
+            }
             let step = ((x[0] - p[0]) * d[0] + (x[1] - p[1]) * d[1]) / dd;
             let s_new = (s + step).clamp(lo, hi);
             let done = (s_new - s).abs() < 1e-15;
@@ -420,9 +429,4 @@ impl Q1Mesh<2, 4> for QuadMesh {
         b.check_reachable()?;
         Ok(b)
     }
-}
-
-/// The smallest corner Jacobian determinant of a quad mesh (a validity margin).
-pub fn min_corner_jacobian(mesh: &QuadMesh) -> f64 {
-    (0..mesh.num_cells()).flat_map(|c| crate::quality::corner_jacobians(&mesh.cell_coords(c))).fold(f64::INFINITY, f64::min)
 }

@@ -29,7 +29,8 @@ use crate::solve::{CholeskySolver, SolveError, SpdSolver};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-pub use chains::min_corner_jacobian;
+pub use chains::Chains;
+pub use patches::Patches;
 
 /// A target or wall shape in D dimensions, as the boundary models need it.
 pub trait BoundaryShape<const D: usize>: Send + Sync + std::fmt::Debug {
@@ -297,6 +298,7 @@ pub struct Deformation<M: Q1Mesh<D, N> = crate::mesh::QuadMesh, const D: usize =
     stage: Vec<[f64; D]>,
     next: Vec<[f64; D]>,
     x: Vec<f64>,
+    f_nodes: Vec<f64>,
     saved_state: <M::Boundary as BoundaryModel<D>>::State,
 }
 
@@ -338,6 +340,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             t: 0.0,
             stats,
             x: vec![0.0; system.num_unknowns()],
+            f_nodes: vec![1.0; n],
             system,
             constraints,
             bvel: vec![[0.0; D]; n],
@@ -408,7 +411,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     ) -> Result<(), DeformError> {
         let dt = 1.0 / self.options.steps.max(1) as f64;
         let t_start = self.t;
-        let mut stops = stops.iter().copied().filter(|&s| s >= t_start).peekable();
+        let mut stops = stops.iter().copied().filter(|&s| s >= t_start && s <= 1.0).peekable();
         while stops.peek().is_some_and(|&s| s <= self.t + 1e-12) {
             stops.next();
             on_stop(self);
@@ -511,7 +514,12 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         let flux = self.mesh.flux_points(nodes, &self.bvel);
         let norm = normalise(self.mesh.cells(), nodes, &self.field, t, self.volume0, flux).map_err(DeformError::from)?;
         let field = &self.field;
-        self.boundary.fill_constraints(t, nodes, |i| norm.f(field, lift(nodes[i])), &mut self.constraints);
+        // f at the nodes, checked: the nodes may have moved where g ≤ 0
+        for (f, x) in self.f_nodes.iter_mut().zip(nodes) {
+            *f = norm.c * field.g_checked(lift(*x), t).map_err(DeformError::from)?.0;
+        }
+        let f_nodes = &self.f_nodes;
+        self.boundary.fill_constraints(t, nodes, |i| f_nodes[i], &mut self.constraints);
         self.system
             .assemble(nodes, &self.constraints, |x| norm.div_data(field, lift(x)))
             .map_err(|e| match e {
@@ -528,8 +536,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.stats.solve += t2.elapsed();
         self.stats.solves += 1;
         self.system.expand(&self.x, &self.constraints, &mut self.u);
-        for (i, u) in self.u.iter_mut().enumerate() {
-            let f = norm.f(field, lift(nodes[i]));
+        for (u, f) in self.u.iter_mut().zip(&self.f_nodes) {
             *u = u.map(|c| f * c);
         }
         Ok(())

@@ -148,7 +148,9 @@ impl Patches {
                     b[k] += h;
                     sub(self.patch_point(patch, b, t), self.patch_point(patch, a, t))
                 });
-                unit(cross(d[0], d[1]))
+                let n = cross(d[0], d[1]);
+                // where Γ_t degenerates, the starting plane's normal
+                if dot(n, n) > 0.0 { unit(n) } else { pn }
             }
             _ => pn,
         }
@@ -179,6 +181,9 @@ impl Patches {
             let (a11, a12, a22) = (dot(d[0], d[0]), dot(d[0], d[1]), dot(d[1], d[1]));
             let (b1, b2) = (dot(d[0], r), dot(d[1], r));
             let det = a11 * a22 - a12 * a12;
+            if !(det > 0.0) {
+                break; // Γ_t degenerates here: keep the last parameter
+            }
             let step = [(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det];
             let mut next = [s[0] + step[0], s[1] + step[1]];
             if bounded {
@@ -201,6 +206,9 @@ impl Patches {
             let h = 1e-7;
             let d = sub(self.edge_point(edge, sigma + h, t), self.edge_point(edge, sigma - h, t)).map(|c| c / (2.0 * h));
             let r = sub(x, self.edge_point(edge, sigma, t));
+            if !(dot(d, d) > 0.0) {
+                break;
+            }
             let mut next = sigma + dot(d, r) / dot(d, d);
             if bounded {
                 next = next.clamp(0.0, 1.0);
@@ -422,28 +430,19 @@ fn classify(mesh: &HexMesh, parts: Vec<BoundaryPart<3>>) -> Result<Patches, Defo
         let faces: Vec<usize> = (0..mesh.faces.len()).filter(|&f| face_patch[f] == p).collect();
         patches.push(planar_patch(mesh, &faces, &parts)?);
     }
-    // which patches each node touches
-    let mut node_patches: Vec<Vec<usize>> = vec![Vec::new(); mesh.num_nodes()];
-    for (f, face) in mesh.faces.iter().enumerate() {
-        for &n in &face.nodes {
-            if !node_patches[n].contains(&face_patch[f]) {
-                node_patches[n].push(face_patch[f]);
-            }
-        }
-    }
+    let node_patches = node_patches(&mesh.faces, &face_patch, mesh.num_nodes());
     let mut edges: Vec<Edge> = Vec::new();
     let mut edge_of: HashMap<[usize; 2], usize> = HashMap::new();
     let mut roles = vec![Role3::Interior; mesh.num_nodes()];
     for i in 0..mesh.num_nodes() {
-        let ps = &mut node_patches[i];
-        ps.sort_unstable();
+        let ps = &node_patches[i];
         roles[i] = match ps.len() {
             0 => Role3::Interior,
             1 => Role3::Face { patch: ps[0], s: patches[ps[0]].param(mesh.nodes[i]) },
             2 => {
                 let key = [ps[0], ps[1]];
                 let id = *edge_of.entry(key).or_insert_with(|| {
-                    edges.push(edge_between(mesh, &node_patches_snapshot(&mesh.faces, &face_patch, mesh.num_nodes()), key, &patches, &parts));
+                    edges.push(edge_between(mesh, &node_patches, key, &patches, &parts));
                     edges.len() - 1
                 });
                 let e = &edges[id];
@@ -456,8 +455,8 @@ fn classify(mesh: &HexMesh, parts: Vec<BoundaryPart<3>>) -> Result<Patches, Defo
     Ok(Patches { parts, patches, edges, roles, start: mesh.nodes.clone() })
 }
 
-/// The patches of every node (as in `classify`, for edge extents).
-fn node_patches_snapshot(faces: &[crate::mesh::BoundaryFace], face_patch: &[usize], n: usize) -> Vec<Vec<usize>> {
+/// The patches every node touches, sorted.
+fn node_patches(faces: &[crate::mesh::BoundaryFace], face_patch: &[usize], n: usize) -> Vec<Vec<usize>> {
     let mut out: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (f, face) in faces.iter().enumerate() {
         for &v in &face.nodes {
@@ -466,6 +465,7 @@ fn node_patches_snapshot(faces: &[crate::mesh::BoundaryFace], face_patch: &[usiz
             }
         }
     }
+    out.iter_mut().for_each(|p| p.sort_unstable());
     out
 }
 
