@@ -17,15 +17,11 @@
 //!   the curve evaluated at some parameter, so they lie on the curve to
 //!   machine precision.
 
+use crate::numeric::{add, brent_root, dot, norm, ray_s_min, scale, sub, unit};
 use serde::Deserialize;
 use std::f64::consts::TAU;
 
-/// Machine epsilon, used for root-finding tolerances.
-const EPS: f64 = f64::EPSILON;
 
-/// A ray hit closer than this fraction of the problem's length scale is
-/// taken to be the ray's own origin lying on the curve, not a hit (`s > 0`).
-const RAY_ORIGIN_TOL: f64 = 1e-12;
 
 /// Target polyline resolution used to bracket numeric queries: the sampled
 /// polyline has chords no longer than its length divided by this.
@@ -357,34 +353,16 @@ impl Shape {
 // ---------------------------------------------------------------------------
 // Small vector helpers.
 
-fn add(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] + b[0], a[1] + b[1]]
-}
 
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
 
-fn scale(k: f64, a: [f64; 2]) -> [f64; 2] {
-    [k * a[0], k * a[1]]
-}
 
-fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
 
 /// z-component of the 3D cross product.
 fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
-fn norm(a: [f64; 2]) -> f64 {
-    a[0].hypot(a[1])
-}
 
-fn unit(a: [f64; 2]) -> [f64; 2] {
-    scale(1.0 / norm(a), a)
-}
 
 /// Rotation by 90° clockwise: turns a tangent into our normal.
 fn rot_cw(a: [f64; 2]) -> [f64; 2] {
@@ -401,13 +379,6 @@ fn rotate(a: [f64; 2], cos: f64, sin: f64) -> [f64; 2] {
     [cos * a[0] - sin * a[1], sin * a[0] + cos * a[1]]
 }
 
-/// Smallest accepted ray parameter: hits closer than this to the origin
-/// are round-off images of an origin lying on the curve. Scaled by the
-/// shape size and the origin's distance from it, the two sources of
-/// round-off in the intersection arithmetic.
-fn ray_s_min(origin: [f64; 2], dir: [f64; 2], reference: [f64; 2], size: f64) -> f64 {
-    RAY_ORIGIN_TOL * (size + norm(sub(origin, reference))) / norm(dir)
-}
 
 // ---------------------------------------------------------------------------
 // Closed-form shapes.
@@ -931,62 +902,6 @@ fn ray_param<C: Param>(
     best.map(|(_, t)| t)
 }
 
-/// Brent's root finder on `[a, b]` with `f(a)`, `f(b)` of opposite signs
-/// (or one zero), iterating until the bracket is a few ulps wide.
-fn brent_root(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, mut fa: f64, mut fb: f64) -> f64 {
-    let xtol = EPS * (a.abs().max(b.abs()) + (b - a).abs());
-    let (mut c, mut fc) = (b, fb);
-    let (mut d, mut e) = (b - a, b - a);
-    for _ in 0..200 {
-        if (fb > 0.0) == (fc > 0.0) && fb != 0.0 && fc != 0.0 {
-            (c, fc) = (a, fa);
-            d = b - a;
-            e = d;
-        }
-        if fc.abs() < fb.abs() {
-            (a, fa) = (b, fb);
-            (b, fb) = (c, fc);
-            (c, fc) = (a, fa);
-        }
-        let tol = 2.0 * EPS * b.abs() + 0.5 * xtol;
-        let m = 0.5 * (c - b);
-        if m.abs() <= tol || fb == 0.0 {
-            return b;
-        }
-        if e.abs() >= tol && fa.abs() > fb.abs() {
-            // Inverse quadratic interpolation or secant step, accepted only
-            // when it stays well inside the bracket and keeps shrinking.
-            let s = fb / fa;
-            let (mut p, mut q) = if a == c {
-                (2.0 * m * s, 1.0 - s)
-            } else {
-                let (q0, r) = (fa / fc, fb / fc);
-                (
-                    s * (2.0 * m * q0 * (q0 - r) - (b - a) * (r - 1.0)),
-                    (q0 - 1.0) * (r - 1.0) * (s - 1.0),
-                )
-            };
-            if p > 0.0 {
-                q = -q;
-            }
-            p = p.abs();
-            if 2.0 * p < (3.0 * m * q - (tol * q).abs()).min((e * q).abs()) {
-                e = d;
-                d = p / q;
-            } else {
-                d = m;
-                e = m;
-            }
-        } else {
-            d = m;
-            e = m;
-        }
-        (a, fa) = (b, fb);
-        b += if d.abs() > tol { d } else { tol.copysign(m) };
-        fb = f(b);
-    }
-    b
-}
 
 /// Superellipse `|x/a|^n + |y/b|^n = 1`, parametrised by the polar angle
 /// about its centre (a star-shaped curve, so every angle gives one point;
@@ -1287,6 +1202,7 @@ fn solve_cyclic(lower: &[f64], diag: &[f64], upper: &[f64], rhs: &[f64]) -> Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::EPS;
     use proptest::prelude::*;
     use proptest::test_runner::{Config, TestRunner};
 

@@ -17,15 +17,11 @@
 //!   its closest points clamp to the `z_range`.
 
 use crate::expr::Expr;
+use crate::numeric::{add, brent_root, dot, norm, ray_s_min, scale, sub, unit, EPS};
 use serde::Deserialize;
 use std::f64::consts::TAU;
 
-/// Machine epsilon, used for root-finding and minimisation tolerances.
-const EPS: f64 = f64::EPSILON;
 
-/// A ray hit closer than this fraction of the problem's length scale is
-/// taken to be the ray's own origin lying on the surface, not a hit (`s > 0`).
-const RAY_ORIGIN_TOL: f64 = 1e-12;
 
 /// Intervals of the z sampling of a surface of revolution: the radius
 /// expression is checked for positivity at these samples, and they bracket
@@ -337,29 +333,11 @@ impl Surface {
 // ---------------------------------------------------------------------------
 // Small vector helpers.
 
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
 
-fn scale(k: f64, a: [f64; 3]) -> [f64; 3] {
-    [k * a[0], k * a[1], k * a[2]]
-}
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
-fn norm(a: [f64; 3]) -> f64 {
-    a[0].hypot(a[1]).hypot(a[2])
-}
 
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    scale(1.0 / norm(a), a)
-}
 
 fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
     let d = sub(a, b);
@@ -379,13 +357,6 @@ fn orthonormal_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     )
 }
 
-/// Smallest accepted ray parameter: hits closer than this to the origin
-/// are round-off images of an origin lying on the surface. Scaled by the
-/// surface size and the origin's distance from it, the two sources of
-/// round-off in the intersection arithmetic.
-fn ray_s_min(origin: [f64; 3], dir: [f64; 3], reference: [f64; 3], size: f64) -> f64 {
-    RAY_ORIGIN_TOL * (size + norm(sub(origin, reference))) / norm(dir)
-}
 
 /// Roots `s1 <= s2` of `|o + s·d| = 1`, computed without cancellation, or
 /// `None` if the line misses the unit sphere (or `d` is zero).
@@ -705,62 +676,6 @@ fn bisect_decreasing(f: &dyn Fn(f64) -> f64, lo: &mut f64, hi: &mut f64) -> f64 
 // ---------------------------------------------------------------------------
 // One-dimensional numerics.
 
-/// Brent's root finder on `[a, b]` with `f(a)`, `f(b)` of opposite signs
-/// (or one zero), iterating until the bracket is a few ulps wide.
-fn brent_root(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, mut fa: f64, mut fb: f64) -> f64 {
-    let xtol = EPS * (a.abs().max(b.abs()) + (b - a).abs());
-    let (mut c, mut fc) = (b, fb);
-    let (mut d, mut e) = (b - a, b - a);
-    for _ in 0..200 {
-        if (fb > 0.0) == (fc > 0.0) && fb != 0.0 && fc != 0.0 {
-            (c, fc) = (a, fa);
-            d = b - a;
-            e = d;
-        }
-        if fc.abs() < fb.abs() {
-            (a, fa) = (b, fb);
-            (b, fb) = (c, fc);
-            (c, fc) = (a, fa);
-        }
-        let tol = 2.0 * EPS * b.abs() + 0.5 * xtol;
-        let m = 0.5 * (c - b);
-        if m.abs() <= tol || fb == 0.0 {
-            return b;
-        }
-        if e.abs() >= tol && fa.abs() > fb.abs() {
-            // Inverse quadratic interpolation or secant step, accepted only
-            // when it stays well inside the bracket and keeps shrinking.
-            let s = fb / fa;
-            let (mut p, mut q) = if a == c {
-                (2.0 * m * s, 1.0 - s)
-            } else {
-                let (q0, r) = (fa / fc, fb / fc);
-                (
-                    s * (2.0 * m * q0 * (q0 - r) - (b - a) * (r - 1.0)),
-                    (q0 - 1.0) * (r - 1.0) * (s - 1.0),
-                )
-            };
-            if p > 0.0 {
-                q = -q;
-            }
-            p = p.abs();
-            if 2.0 * p < (3.0 * m * q - (tol * q).abs()).min((e * q).abs()) {
-                e = d;
-                d = p / q;
-            } else {
-                d = m;
-                e = m;
-            }
-        } else {
-            d = m;
-            e = m;
-        }
-        (a, fa) = (b, fb);
-        b += if d.abs() > tol { d } else { tol.copysign(m) };
-        fb = f(b);
-    }
-    b
-}
 
 /// Brent's derivative-free minimiser on `[a, b]` (as in Numerical Recipes'
 /// `brent`), returning `(x, f(x))`. The tolerance is a few ulps of `x`

@@ -11,6 +11,7 @@ pub mod io;
 pub mod jacobian;
 pub mod lsfem;
 pub mod mesh;
+pub mod numeric;
 pub mod quality;
 pub mod render;
 pub mod solve;

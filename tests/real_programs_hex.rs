@@ -4,64 +4,18 @@
 //! The Python interpreter is `$DEFORMESH_PYTHON`, else `.venv/bin/python` in
 //! the crate; `scripts/test.sh` sets the latter up.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use deformesh::hexquality::{det_j_bounds, hex_volume, invalid_hex_cells, scaled_jacobian};
 use deformesh::io::msh::{write_hex_msh, DOMAIN_NAME};
 use deformesh::io::vtu::{write_hex_vtu, VTK_HEXAHEDRON};
 use deformesh::mesh::HexMesh;
-use serde_json::Value;
 
-/// The Python with `gmsh` and `vtk`, or a panic saying how to get one.
-fn python() -> PathBuf {
-    if let Some(p) = std::env::var_os("DEFORMESH_PYTHON") {
-        let p = PathBuf::from(p);
-        assert!(
-            p.exists(),
-            "DEFORMESH_PYTHON={} does not exist",
-            p.display()
-        );
-        return p;
-    }
-    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
-    assert!(
-        venv.exists(),
-        "no Python with gmsh and vtk: set DEFORMESH_PYTHON or run scripts/test.sh \
-         (it creates {} and runs the tests)",
-        venv.display()
-    );
-    venv
-}
+mod common;
+use common::{floats, run_checker};
 
-/// The checker `script`: in the project it lives in `tests/python/`, in a
-/// stand-alone copy of the I/O code in `python/`.
-fn checker(script: &str) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    ["tests/python", "python"]
-        .iter()
-        .map(|dir| root.join(dir).join(script))
-        .find(|p| p.exists())
-        .unwrap_or_else(|| panic!("{script} not found in tests/python/ or python/"))
-}
 
-/// Runs the checker `script` on `file` and parses the JSON it prints.
-fn run_checker(script: &str, file: &Path) -> Value {
-    let script = checker(script);
-    let out = Command::new(python())
-        .arg(&script)
-        .arg(file)
-        .output()
-        .expect("cannot start Python");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        out.status.success(),
-        "{} failed: {stderr}",
-        script.display()
-    );
-    serde_json::from_slice(&out.stdout)
-        .unwrap_or_else(|e| panic!("bad JSON from {}: {e}\n{stderr}", script.display()))
-}
+
 
 /// A 4×3×3 brick bent by a smooth non-affine map: every cell is a genuinely
 /// trilinear hex (det J not constant), and all stay valid.
@@ -78,14 +32,6 @@ fn distorted_brick() -> HexMesh {
     m
 }
 
-/// The JSON array `v` as `f64`s.
-fn floats(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .expect("array")
-        .iter()
-        .map(|x| x.as_f64().expect("number"))
-        .collect()
-}
 
 /// `|a - b| / |b|`.
 fn rel(a: f64, b: f64) -> f64 {

@@ -20,6 +20,7 @@ use super::{BoundaryModel, BoundaryPart, DeformError, MoveMode, PartKind, Q1Mesh
 use crate::hexquality::{hex_volume, invalid_hex_cells};
 use crate::lsfem::{Constraint, GAUSS};
 use crate::mesh::{HexMesh, Point3};
+use crate::numeric::{cross3 as cross, dot, sub, unit};
 use std::collections::HashMap;
 
 /// A planar patch of boundary faces of one part, with its affine
@@ -546,21 +547,4 @@ fn planar_patch(mesh: &HexMesh, faces: &[usize], parts: &[BoundaryPart<3>]) -> R
         }
     }
     Ok(p)
-}
-
-fn sub(a: Point3, b: Point3) -> Point3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: Point3, b: Point3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: Point3, b: Point3) -> Point3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn unit(a: Point3) -> Point3 {
-    let l = dot(a, a).sqrt();
-    a.map(|c| c / l)
 }

@@ -1,9 +1,6 @@
 //! PNG and animated GIF output, with atomic file writes.
 
-use std::fs::{self, OpenOptions};
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::path::Path;
 
 use tiny_skia::Pixmap;
 
@@ -93,37 +90,7 @@ fn straight_rgba(p: &Pixmap) -> Vec<u8> {
         .collect()
 }
 
-/// Writes `bytes` to a fresh temporary file beside `path` and renames it
-/// into place; the rename is atomic because both are in one directory.
+/// The project's atomic write (temporary sibling, then rename).
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
-    let tmp = temp_path(path)?;
-    let result = write_new(&tmp, bytes).and_then(|()| fs::rename(&tmp, path));
-    if result.is_err() {
-        // Best effort: the original error matters more than this one.
-        let _ = fs::remove_file(&tmp);
-    }
-    Ok(result?)
-}
-
-/// A temporary name beside `path`, unique within this process (counter)
-/// and across processes (pid).
-fn temp_path(path: &Path) -> Result<PathBuf, RenderError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path.file_name().ok_or_else(|| {
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            format!("no file name in {}", path.display()),
-        )
-    })?;
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp_name = format!(".{}.{}.{n}.tmp", name.to_string_lossy(), std::process::id());
-    Ok(path.with_file_name(tmp_name))
-}
-
-/// Creates `path` (failing if it exists), writes `bytes` and flushes them
-/// to disk so the rename never exposes an empty file after a crash.
-fn write_new(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut f = OpenOptions::new().write(true).create_new(true).open(path)?;
-    f.write_all(bytes)?;
-    f.sync_all()
+    Ok(crate::io::write_atomic(path, bytes)?)
 }
