@@ -9,7 +9,7 @@ fn one_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("step");
     group.sample_size(10);
     for n in [100, 200, 400] {
-        let mut d = demo_deformation(n).expect("demo case");
+        let mut d = demo_deformation(n, deformesh::deform::SolverChoice::Cholesky).expect("demo case");
         group.throughput(criterion::Throughput::Elements(d.num_unknowns() as u64));
         group.bench_function(BenchmarkId::from_parameter(format!("{n}x{n}")), |b| {
             // each iteration starts again from t = 0

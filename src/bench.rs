@@ -2,7 +2,7 @@
 //! criterion bench): the quarter-disk problem on an n×n box, timed by phase.
 
 use crate::case::{AnySetup, Case, DEMO_CASE};
-use crate::deform::{Deformation, Deformation3, Q1Mesh};
+use crate::deform::{Deformation, Deformation3, Q1Mesh, SolverChoice};
 use std::path::Path;
 
 /// Seconds of one step by phase, best of the repetitions.
@@ -28,10 +28,11 @@ impl StepTiming {
 }
 
 /// Prepares the demo case at n×n cells with one nominal step.
-pub fn demo_deformation(n: usize) -> Result<Deformation, Box<dyn std::error::Error + Send + Sync>> {
+pub fn demo_deformation(n: usize, solver: SolverChoice) -> Result<Deformation, Box<dyn std::error::Error + Send + Sync>> {
     let mut case = Case::parse(DEMO_CASE, "<built-in demo>")?;
     case.mesh.cells = vec![n, n];
     case.time.steps = 100;
+    case.time.solver = solver;
     let s = case.setup("<built-in demo>", Path::new("."))?;
     Ok(Deformation::new(s.mesh, s.parts, s.field, s.options)?)
 }
@@ -40,10 +41,11 @@ pub fn demo_deformation(n: usize) -> Result<Deformation, Box<dyn std::error::Err
 pub const QUARTER_BALL: &str = include_str!("../cases/quarter_ball.toml");
 
 /// Prepares the quarter ball at n×n×n cells with one nominal step.
-pub fn ball_deformation(n: usize) -> Result<Deformation3, Box<dyn std::error::Error + Send + Sync>> {
+pub fn ball_deformation(n: usize, solver: SolverChoice) -> Result<Deformation3, Box<dyn std::error::Error + Send + Sync>> {
     let mut case = Case::parse(QUARTER_BALL, "<quarter ball>")?;
     case.mesh.cells = vec![n, n, n];
     case.time.steps = 100;
+    case.time.solver = solver;
     match case.setup_any("<quarter ball>", Path::new("."))? {
         AnySetup::Hex(s) => Ok(Deformation3::new(s.mesh, s.parts, s.field, s.options)?),
         AnySetup::Quad(_) => unreachable!("the quarter ball is 3D"),
@@ -51,13 +53,13 @@ pub fn ball_deformation(n: usize) -> Result<Deformation3, Box<dyn std::error::Er
 }
 
 /// Times `repeat` first steps of the 2D demo case at n×n cells.
-pub fn one_step(n: usize, repeat: usize) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
-    time_steps(repeat, || demo_deformation(n))
+pub fn one_step(n: usize, repeat: usize, solver: SolverChoice) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+    time_steps(repeat, || demo_deformation(n, solver))
 }
 
 /// Times `repeat` first steps of the quarter ball at n³ cells.
-pub fn one_step_3d(n: usize, repeat: usize) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
-    time_steps(repeat, || ball_deformation(n))
+pub fn one_step_3d(n: usize, repeat: usize, solver: SolverChoice) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+    time_steps(repeat, || ball_deformation(n, solver))
 }
 
 /// Peak resident memory of this process so far, in MiB (Linux; None

@@ -4,7 +4,7 @@
 //! Every table rejects unknown fields, and every error names the file and
 //! the field (toml's own errors add the line and column).
 
-use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, BoundaryShape};
+use crate::deform::{BoundaryPart, BoundaryShape, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
 use crate::expr::Expr;
 use crate::geometry::ShapeSpec;
 use crate::geometry3::SurfaceSpec;
@@ -180,6 +180,9 @@ pub struct TimeSpec {
     /// Weight of the div term of the functional.
     #[serde(default = "one")]
     pub div_weight: f64,
+    /// `auto` (default), `cholesky` or `cg`.
+    #[serde(default)]
+    pub solver: SolverChoice,
 }
 
 fn default_steps() -> usize {
@@ -192,7 +195,7 @@ fn one() -> f64 {
 
 impl Default for TimeSpec {
     fn default() -> Self {
-        TimeSpec { steps: default_steps(), integrator: Integrator::Euler, div_weight: 1.0 }
+        TimeSpec { steps: default_steps(), integrator: Integrator::Euler, div_weight: 1.0, solver: SolverChoice::Auto }
     }
 }
 
@@ -370,7 +373,13 @@ impl Case {
             return Err(err(format!("field `output.frames`: {} and {} would both be written as frame_t{:.2}.png", w[0], w[1], w[0])));
         }
         let name = self.name.clone().unwrap_or_else(|| Path::new(file).file_stem().map_or("case".into(), |s| s.to_string_lossy().into_owned()));
-        let options = DeformOptions { steps: self.time.steps, integrator: self.time.integrator, div_weight: self.time.div_weight, ..Default::default() };
+        let options = DeformOptions {
+            steps: self.time.steps,
+            integrator: self.time.integrator,
+            div_weight: self.time.div_weight,
+            solver: self.time.solver,
+            ..Default::default()
+        };
         if dim == 2 {
             let mut mesh = QuadMesh::structured_box([m.lower[0], m.lower[1]], [m.upper[0], m.upper[1]], m.cells[0], m.cells[1]);
             let (parts, side_part) = self.parts(file, &BOX_SIDES, build_curve)?;

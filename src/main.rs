@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use deformesh::case::{Case, DEMO_CASE};
 use deformesh::case::AnySetup;
+use deformesh::deform::SolverChoice;
 use deformesh::driver::{run_any, Progress, RunError};
 use deformesh::io::msh::MshError;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -53,6 +54,9 @@ enum Command {
         /// 2: the quarter disk on n² quads; 3: the quarter ball on n³ hexes.
         #[arg(long, default_value_t = 2)]
         dim: usize,
+        /// auto, cholesky or cg.
+        #[arg(long, default_value = "auto")]
+        solver: String,
     },
 }
 
@@ -100,14 +104,16 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { sizes, repeat, dim } => {
+        Command::Bench { sizes, repeat, dim, solver } => {
+            let solver: SolverChoice = serde_json::from_value(serde_json::Value::String(solver.clone()))
+                .map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky or cg, got `{solver}`"))?;
             anyhow::ensure!(dim == 2 || dim == 3, "--dim must be 2 or 3, got {dim}");
             println!(
                 "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>13} {:>11} {:>12}",
                 "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "us/unknown", "analyse_s", "peak_MiB"
             );
             for n in sizes {
-                let b = if dim == 2 { deformesh::bench::one_step(n, repeat) } else { deformesh::bench::one_step_3d(n, repeat) };
+                let b = if dim == 2 { deformesh::bench::one_step(n, repeat, solver) } else { deformesh::bench::one_step_3d(n, repeat, solver) };
                 let b = b.map_err(|e| anyhow::anyhow!(e))?;
                 println!(
                     "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>13.3} {:>11.4} {:>12}",

@@ -187,3 +187,16 @@ fn expression_field_in_3d_is_normalised() {
     let jf = d.jf_now().unwrap();
     assert!(jf.iter().all(|&r| r > 0.7 && r < 1.3), "J/f range");
 }
+
+#[test]
+fn conjugate_gradients_give_the_cholesky_mesh() {
+    use deformesh::deform::SolverChoice;
+    let with = |solver| run(setup("quarter_ball.toml", |c| {
+        c.mesh.cells = vec![6, 6, 6];
+        c.time.solver = solver;
+    }));
+    let (a, b) = (with(SolverChoice::Cholesky), with(SolverChoice::Cg));
+    let diff = a.mesh.nodes.iter().zip(&b.mesh.nodes).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+    assert!(diff < 1e-7, "meshes differ by {diff}");
+    assert_valid(&b);
+}

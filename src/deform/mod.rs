@@ -25,7 +25,7 @@ mod patches;
 
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
-use crate::solve::{CholeskySolver, SolveError, SpdSolver};
+use crate::solve::{CholeskySolver, ConjugateGradient, SolveError, SpdSolver};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -253,6 +253,24 @@ pub struct RunStats {
     pub analyze: Duration,
 }
 
+/// Which sparse solver Algorithm 1 uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SolverChoice {
+    /// Cholesky up to [`AUTO_CG_UNKNOWNS`] unknowns, conjugate gradients above.
+    #[default]
+    Auto,
+    /// Sparse Cholesky (faer): exact, but its fill grows fast in 3D.
+    Cholesky,
+    /// Jacobi-preconditioned conjugate gradients, warm-started.
+    Cg,
+}
+
+/// Above this many unknowns `auto` chooses conjugate gradients: measured on
+/// the quarter ball, Cholesky's factor needs 2 GB at 10⁵ unknowns and
+/// 12.5 GB at 3.4·10⁵.
+pub const AUTO_CG_UNKNOWNS: usize = 150_000;
+
 /// Options of Algorithm 1.
 #[derive(Clone, Debug)]
 pub struct DeformOptions {
@@ -264,11 +282,13 @@ pub struct DeformOptions {
     pub div_weight: f64,
     /// Give up when the step has been halved this often in a row.
     pub max_halvings: usize,
+    /// The sparse solver.
+    pub solver: SolverChoice,
 }
 
 impl Default for DeformOptions {
     fn default() -> Self {
-        DeformOptions { steps: 40, integrator: Integrator::Euler, div_weight: 1.0, max_halvings: 12 }
+        DeformOptions { steps: 40, integrator: Integrator::Euler, div_weight: 1.0, max_halvings: 12, solver: SolverChoice::Auto }
     }
 }
 
@@ -309,7 +329,14 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// Prepares Algorithm 1: classifies nodes, checks that every moving
     /// part can reach its target, builds the pattern and analyses it.
     pub fn new(mesh: M, parts: Vec<BoundaryPart<D>>, field: JacobianField, options: DeformOptions) -> Result<Self, DeformError> {
-        Self::with_solver(mesh, parts, field, options, Box::new(CholeskySolver::new()))
+        // D unknowns per node bound the system size from above
+        let cg = match options.solver {
+            SolverChoice::Auto => D * mesh.nodes().len() > AUTO_CG_UNKNOWNS,
+            SolverChoice::Cholesky => false,
+            SolverChoice::Cg => true,
+        };
+        let solver: Box<dyn SpdSolver> = if cg { Box::new(ConjugateGradient::default()) } else { Box::new(CholeskySolver::new()) };
+        Self::with_solver(mesh, parts, field, options, solver)
     }
 
     /// As [`Deformation::new`] with a given solver.
