@@ -257,7 +257,8 @@ pub struct RunStats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverChoice {
-    /// Cholesky up to [`AUTO_CG_UNKNOWNS`] unknowns, conjugate gradients above.
+    /// Cholesky, except in 3D above [`AUTO_CG_UNKNOWNS`] unknowns, where
+    /// conjugate gradients.
     #[default]
     Auto,
     /// Sparse Cholesky (faer): exact, but its fill grows fast in 3D.
@@ -266,9 +267,10 @@ pub enum SolverChoice {
     Cg,
 }
 
-/// Above this many unknowns `auto` chooses conjugate gradients: measured on
-/// the quarter ball, Cholesky's factor needs 2 GB at 10⁵ unknowns and
-/// 12.5 GB at 3.4·10⁵.
+/// Above this many unknowns in 3D `auto` chooses conjugate gradients:
+/// measured on the quarter ball, a Cholesky step takes 25 s and 2.1 GB at
+/// 10⁵ unknowns and 313 s and 12.5 GB at 3.4·10⁵ (CG: 1.2 s and 5.4 s). In
+/// 2D Cholesky stays ahead (6 s against 45 s at 1.3·10⁶ unknowns).
 pub const AUTO_CG_UNKNOWNS: usize = 150_000;
 
 /// Options of Algorithm 1.
@@ -331,7 +333,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     pub fn new(mesh: M, parts: Vec<BoundaryPart<D>>, field: JacobianField, options: DeformOptions) -> Result<Self, DeformError> {
         // D unknowns per node bound the system size from above
         let cg = match options.solver {
-            SolverChoice::Auto => D * mesh.nodes().len() > AUTO_CG_UNKNOWNS,
+            SolverChoice::Auto => D == 3 && D * mesh.nodes().len() > AUTO_CG_UNKNOWNS,
             SolverChoice::Cholesky => false,
             SolverChoice::Cg => true,
         };
