@@ -200,3 +200,23 @@ fn conjugate_gradients_give_the_cholesky_mesh() {
     assert!(diff < 1e-7, "meshes differ by {diff}");
     assert_valid(&b);
 }
+
+#[test]
+fn a_jumping_correspondence_in_3d_is_reported_as_tangling() {
+    // (±1, 0, 0) lie inside the evolute of this ellipsoid: closest points
+    // of the end faces jump between its sides. 3D does not detect this up
+    // front (2D does); the run stops and names the cells instead.
+    let text = "[mesh]\nlower = [-1.0, -0.5, -0.5]\nupper = [1.0, 0.5, 0.5]\ncells = [8, 4, 4]\n\
+        [[boundary]]\nname = \"shell\"\nsides = [\"xmin\", \"xmax\", \"ymin\", \"ymax\", \"zmin\", \"zmax\"]\nkind = \"move\"\n\
+        shape = { type = \"ellipsoid\", centre = [0.0, 0.0, 0.0], semi_axes = [1.6, 0.9, 0.9] }\ncorrespondence = \"normal\"\n";
+    let AnySetup::Hex(s) = Case::parse(text, "fold.toml").unwrap().setup_any("fold.toml", Path::new(".")).unwrap() else { panic!() };
+    let mut d = Deformation3::new(s.mesh, s.parts, s.field, s.options).unwrap();
+    match d.run(&[], |_| {}, |_| {}) {
+        Err(deformesh::deform::DeformError::Tangled { cells, t, .. }) => {
+            assert!(!cells.is_empty() && t < 1.0);
+            // the state is the last valid one
+            assert!(hex_mesh_quality(&d.mesh).invalid_cells.is_empty());
+        }
+        other => panic!("expected tangling, got {:?}", other.map(|_| ())),
+    }
+}
