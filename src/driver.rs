@@ -280,8 +280,8 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let scaled = def.mesh.scaled_jacobians();
     let vtu = def.mesh.vtu(&[("J/f", &ratios), ("scaled_jacobian", &scaled), ("start_size", &start_sizes)])?;
     files.push(("mesh.vtu".into(), vtu.into_bytes()));
-    let all_nodes = [&def.start, &def.mesh.nodes().to_vec()].into_iter().cloned().chain(stills.iter().chain(&anim).map(|s| s.1.clone())).collect::<Vec<_>>();
-    let bounds = frame_bounds(all_nodes.iter());
+    let node_sets = [def.start.as_slice(), def.mesh.nodes()].into_iter().chain(stills.iter().chain(&anim).map(|s| s.1.as_slice()));
+    let bounds = frame_bounds(node_sets);
     let range = symmetric_range(&ratios);
     let look = |title: String, width: u32| Look { bounds, range, title, width, output: &output };
     let main_picture = def.mesh.draw(def.mesh.nodes(), &ratios, &look(format!("{name}: J/f at t = 1"), output.width))?;
@@ -335,7 +335,7 @@ fn symmetric_range(values: &[f64]) -> (f64, f64) {
 }
 
 /// The box around all node sets, so frames align.
-fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a Vec<[f64; D]>>) -> ([f64; D], [f64; D]) {
+fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a [[f64; D]]>) -> ([f64; D], [f64; D]) {
     let mut lo = [f64::INFINITY; D];
     let mut hi = [f64::NEG_INFINITY; D];
     for p in sets.flatten() {
