@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the whole test suite, including the checks against the real Gmsh and
-# VTK (tests/real_programs.rs). Creates .venv with the Python packages they
+# VTK (tests/real_programs*.rs). Creates .venv with the Python packages they
 # need on first use; set DEFORMESH_PYTHON to use another interpreter instead.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,4 +9,11 @@ if [[ -z "${DEFORMESH_PYTHON:-}" && ! -x .venv/bin/python ]]; then
     python3 -m venv .venv
     .venv/bin/pip install --quiet "gmsh==4.15.*" "vtk==9.7.*"
 fi
-cargo test "$@"
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+status=0
+cargo test "$@" 2>&1 | tee "$log" || status=$?
+# one summary line over all test binaries (unit, integration, doc tests)
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
+     END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
+exit "$status"
