@@ -22,11 +22,11 @@ mod surface;
 mod tests;
 mod view;
 
-use tiny_skia::{Color, Pixmap};
+use tiny_skia::Pixmap;
 
 use super::colour::ColourMap;
 use super::layout::Layout;
-use super::{draw, draw_title, legend, resolve_range, RenderError};
+use super::{canvas, decorate, draw, legend, resolve_range, Legend, RenderError};
 use crate::mesh::HexMesh;
 use raster::{Canvas, EdgeStyle};
 use view::View;
@@ -146,24 +146,10 @@ pub fn render_hex(
 ) -> Result<Pixmap, RenderError> {
     let plan = Plan3::new(mesh, cell_values, opts)?;
     let layout = &plan.layout;
-    let size_error = RenderError::ImageSize {
-        width: layout.width,
-        height: layout.height,
-    };
-    let mut pixmap = Pixmap::new(layout.width, layout.height).ok_or(size_error)?;
-    pixmap.fill(Color::WHITE);
+    let mut pixmap = canvas(layout)?;
     draw_surface(&mut pixmap, &plan, mesh, cell_values, opts);
-    legend::draw_colour_bar(
-        &mut pixmap,
-        layout,
-        plan.cmap,
-        plan.range,
-        &plan.tick_labels,
-        &opts.label,
-    );
-    if let Some(title) = &opts.title {
-        draw_title(&mut pixmap, layout, title);
-    }
+    let legend = Legend { cmap: plan.cmap, range: plan.range, tick_labels: &plan.tick_labels, label: &opts.label, title: opts.title.as_deref() };
+    decorate(&mut pixmap, layout, &legend);
     Ok(pixmap)
 }
 

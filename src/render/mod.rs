@@ -204,12 +204,7 @@ pub fn render_mesh(
 ) -> Result<Pixmap, RenderError> {
     let plan = Plan::new(mesh, cell_values, opts)?;
     let layout = &plan.layout;
-    let size_error = RenderError::ImageSize {
-        width: layout.width,
-        height: layout.height,
-    };
-    let mut pixmap = Pixmap::new(layout.width, layout.height).ok_or(size_error)?;
-    pixmap.fill(Color::WHITE);
+    let mut pixmap = canvas(layout)?;
     let clip = draw::plot_clip(layout);
     draw::cells(
         &mut pixmap,
@@ -221,18 +216,34 @@ pub fn render_mesh(
         clip.as_ref(),
     );
     draw::edges(&mut pixmap, layout, mesh, opts.draw_edges, clip.as_ref());
-    legend::draw_colour_bar(
-        &mut pixmap,
-        layout,
-        plan.cmap,
-        plan.range,
-        &plan.tick_labels,
-        &opts.label,
-    );
-    if let Some(title) = &opts.title {
-        draw_title(&mut pixmap, layout, title);
-    }
+    let legend = Legend { cmap: plan.cmap, range: plan.range, tick_labels: &plan.tick_labels, label: &opts.label, title: opts.title.as_deref() };
+    decorate(&mut pixmap, layout, &legend);
     Ok(pixmap)
+}
+
+/// A white picture of the layout's size.
+fn canvas(layout: &Layout) -> Result<Pixmap, RenderError> {
+    let size_error = RenderError::ImageSize { width: layout.width, height: layout.height };
+    let mut pixmap = Pixmap::new(layout.width, layout.height).ok_or(size_error)?;
+    pixmap.fill(Color::WHITE);
+    Ok(pixmap)
+}
+
+/// What surrounds a plot: its colour bar and title.
+struct Legend<'a> {
+    cmap: ColourMap,
+    range: (f64, f64),
+    tick_labels: &'a [String],
+    label: &'a str,
+    title: Option<&'a str>,
+}
+
+/// Draws the colour bar and the title around a drawn plot (2D and 3D).
+fn decorate(pixmap: &mut Pixmap, layout: &Layout, legend: &Legend) {
+    legend::draw_colour_bar(pixmap, layout, legend.cmap, legend.range, legend.tick_labels, legend.label);
+    if let Some(title) = legend.title {
+        draw_title(pixmap, layout, title);
+    }
 }
 
 /// Everything decided before drawing: validated inputs turned into a
