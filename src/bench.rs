@@ -27,38 +27,44 @@ impl StepTiming {
     }
 }
 
-/// Prepares the demo case at n×n cells with one nominal step.
-pub fn demo_deformation(n: usize, solver: SolverChoice) -> Result<Deformation, Box<dyn std::error::Error + Send + Sync>> {
-    let mut case = Case::parse(DEMO_CASE, "<built-in demo>")?;
-    case.mesh.cells = vec![n, n];
-    case.time.steps = 100;
-    case.time.solver = solver;
-    let s = case.setup("<built-in demo>", Path::new("."))?;
-    Ok(Deformation::new(s.mesh, s.parts, s.field, s.options)?)
-}
-
 /// The quarter-ball case (`cases/quarter_ball.toml`) at n³ cells.
 pub const QUARTER_BALL: &str = include_str!("../cases/quarter_ball.toml");
 
-/// Prepares the quarter ball at n×n×n cells with one nominal step.
-pub fn ball_deformation(n: usize, solver: SolverChoice) -> Result<Deformation3, Box<dyn std::error::Error + Send + Sync>> {
-    let mut case = Case::parse(QUARTER_BALL, "<quarter ball>")?;
-    case.mesh.cells = vec![n, n, n];
+/// Errors of the benchmark helpers (case, setup or deformation).
+pub type BenchError = Box<dyn std::error::Error + Send + Sync>;
+
+/// A built-in case at the given cell counts, its nominal step 0.01.
+fn bench_setup(text: &str, name: &str, cells: Vec<usize>, solver: SolverChoice) -> Result<AnySetup, BenchError> {
+    let mut case = Case::parse(text, name)?;
+    case.mesh.cells = cells;
     case.time.steps = 100;
     case.time.solver = solver;
-    match case.setup_any("<quarter ball>", Path::new("."))? {
+    Ok(case.setup_any(name, Path::new("."))?)
+}
+
+/// Prepares the 2D demo case (the quarter disk) at n×n cells.
+pub fn demo_deformation(n: usize, solver: SolverChoice) -> Result<Deformation, BenchError> {
+    match bench_setup(DEMO_CASE, "<built-in demo>", vec![n, n], solver)? {
+        AnySetup::Quad(s) => Ok(Deformation::new(s.mesh, s.parts, s.field, s.options)?),
+        AnySetup::Hex(_) => unreachable!("the demo is 2D"),
+    }
+}
+
+/// Prepares the quarter ball at n×n×n cells.
+pub fn ball_deformation(n: usize, solver: SolverChoice) -> Result<Deformation3, BenchError> {
+    match bench_setup(QUARTER_BALL, "<quarter ball>", vec![n, n, n], solver)? {
         AnySetup::Hex(s) => Ok(Deformation3::new(s.mesh, s.parts, s.field, s.options)?),
         AnySetup::Quad(_) => unreachable!("the quarter ball is 3D"),
     }
 }
 
 /// Times `repeat` first steps of the 2D demo case at n×n cells.
-pub fn one_step(n: usize, repeat: usize, solver: SolverChoice) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+pub fn one_step(n: usize, repeat: usize, solver: SolverChoice) -> Result<StepTiming, BenchError> {
     time_steps(repeat, || demo_deformation(n, solver))
 }
 
 /// Times `repeat` first steps of the quarter ball at n³ cells.
-pub fn one_step_3d(n: usize, repeat: usize, solver: SolverChoice) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+pub fn one_step_3d(n: usize, repeat: usize, solver: SolverChoice) -> Result<StepTiming, BenchError> {
     time_steps(repeat, || ball_deformation(n, solver))
 }
 
@@ -73,8 +79,8 @@ pub fn peak_memory_mib() -> Option<f64> {
 
 fn time_steps<M: Q1Mesh<D, N>, const D: usize, const N: usize>(
     repeat: usize,
-    prepare: impl Fn() -> Result<Deformation<M, D, N>, Box<dyn std::error::Error + Send + Sync>>,
-) -> Result<StepTiming, Box<dyn std::error::Error + Send + Sync>> {
+    prepare: impl Fn() -> Result<Deformation<M, D, N>, BenchError>,
+) -> Result<StepTiming, BenchError> {
     let mut best: Option<StepTiming> = None;
     for _ in 0..repeat.max(1) {
         let mut d = prepare()?;

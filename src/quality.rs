@@ -20,25 +20,28 @@ use crate::mesh::{HexMesh, Point2, QuadMesh};
 use rayon::prelude::*;
 use serde::Serialize;
 
+/// The two edges leaving corner `a` (to the next and the previous corner).
+fn corner_edges(p: &[Point2; 4], a: usize) -> (Point2, Point2) {
+    let (prev, next) = (p[(a + 3) % 4], p[(a + 1) % 4]);
+    ([next[0] - p[a][0], next[1] - p[a][1]], [prev[0] - p[a][0], prev[1] - p[a][1]])
+}
+
 /// det J of the bilinear map at the four corners (reference [0,1]²).
 pub fn corner_jacobians(p: &[Point2; 4]) -> [f64; 4] {
     std::array::from_fn(|a| {
-        let (prev, next) = (p[(a + 3) % 4], p[(a + 1) % 4]);
-        let e1 = [next[0] - p[a][0], next[1] - p[a][1]];
-        let e2 = [prev[0] - p[a][0], prev[1] - p[a][1]];
+        let (e1, e2) = corner_edges(p, a);
         e1[0] * e2[1] - e1[1] * e2[0]
     })
 }
 
 /// Minimum over the corners of the sine of the corner angle.
 pub fn scaled_jacobian(p: &[Point2; 4]) -> f64 {
+    let det = corner_jacobians(p);
     (0..4)
         .map(|a| {
-            let (prev, next) = (p[(a + 3) % 4], p[(a + 1) % 4]);
-            let e1 = [next[0] - p[a][0], next[1] - p[a][1]];
-            let e2 = [prev[0] - p[a][0], prev[1] - p[a][1]];
+            let (e1, e2) = corner_edges(p, a);
             let l = e1[0].hypot(e1[1]) * e2[0].hypot(e2[1]);
-            if l > 0.0 { (e1[0] * e2[1] - e1[1] * e2[0]) / l } else { 0.0 }
+            if l > 0.0 { det[a] / l } else { 0.0 }
         })
         .fold(f64::INFINITY, f64::min)
 }

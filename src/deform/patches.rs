@@ -113,6 +113,11 @@ impl Patches {
         self.parts[part].image(p).map_or([0.0; 3], |x| sub(x, p))
     }
 
+    /// The velocity of corner node i on the path of `part` (0 if none).
+    fn corner_velocity(&self, i: usize, part: Option<usize>) -> Point3 {
+        part.map_or([0.0; 3], |p| self.velocity_of(p, self.start[i]))
+    }
+
     /// Γ_t(s) of a patch (its starting plane if it does not move).
     fn patch_point(&self, patch: usize, s: [f64; 2], t: f64) -> Point3 {
         let p = self.patches[patch].start(s);
@@ -252,7 +257,7 @@ impl Patches {
         match self.roles[i] {
             Role3::Interior => Constraint::free(),
             Role3::Corner { part } => {
-                let v = part.map_or([0.0; 3], |p| self.velocity_of(p, self.start[i]));
+                let v = self.corner_velocity(i, part);
                 Constraint::fixed(v.map(|c| c / f))
             }
             Role3::Face { patch, s } => match self.kind(patch) {
@@ -299,7 +304,7 @@ impl BoundaryModel<3> for Patches {
                 Role3::Interior => [0.0; 3],
                 Role3::Face { patch, s } => self.velocity_of(self.patches[patch].part, self.patches[patch].start(s)),
                 Role3::Edge { edge, sigma } => self.edge_velocity(edge, sigma),
-                Role3::Corner { part } => part.map_or([0.0; 3], |p| self.velocity_of(p, self.start[i])),
+                Role3::Corner { part } => self.corner_velocity(i, part),
             };
         }
     }
@@ -315,7 +320,7 @@ impl BoundaryModel<3> for Patches {
             match self.roles[i] {
                 Role3::Interior => {}
                 Role3::Corner { part } => {
-                    let v = part.map_or([0.0; 3], |p| self.velocity_of(p, self.start[i]));
+                    let v = self.corner_velocity(i, part);
                     nodes[i] = std::array::from_fn(|k| self.start[i][k] + t * v[k]);
                 }
                 Role3::Face { patch, s } => {
