@@ -32,6 +32,7 @@ pub mod expr;
 pub mod geometry;
 pub mod geometry3;
 pub mod hexquality;
+pub mod highorder;
 pub mod io;
 pub mod jacobian;
 pub mod lsfem;

@@ -9,6 +9,7 @@ macro_rules! put {
     };
 }
 
+pub mod curved;
 pub mod msh;
 pub mod vtu;
 
