@@ -8,7 +8,7 @@ use crate::deform::{BoundaryPart, BoundaryShape, Correspondence, DeformOptions, 
 use crate::expr::Expr;
 use crate::geometry::ShapeSpec;
 use crate::geometry3::SurfaceSpec;
-use crate::jacobian::{lift, ImageField, JacobianField, Target, TimePath, EXPR_VARS};
+use crate::jacobian::{lift, ImageField, JacobianError, Interface, JacobianField, Locus, SmallWhere, Target, TimePath, EXPR_VARS};
 use crate::mesh::{HexMesh, QuadMesh, BOX_FACES, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -125,20 +125,32 @@ pub struct PartSpec {
     pub mode: Option<ModeSpec>,
 }
 
-/// The `[jacobian]` table.
+/// The `[jacobian]` table: one field, its time path and a floor.
 #[derive(Clone, Debug, Deserialize, Default)]
+pub struct JacobianSpec {
+    /// The field (`type = ...` and its parameters).
+    #[serde(flatten)]
+    pub field: FieldSpec,
+    /// `linear` (default: g linear in t, the paper's choice) or `inverse`
+    /// (1/g linear in t); see [`TimePath`] for why.
+    #[serde(default)]
+    pub path: Option<TimePath>,
+    /// A lower bound on g₁, so f never reaches 0.
+    #[serde(default)]
+    pub floor: Option<f64>,
+}
+
+/// One prescribed-Jacobian field; combinations nest further fields in `of`.
+#[derive(Clone, Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum JacobianSpec {
-    /// f follows only the change of area.
-    #[default]
-    Uniform,
-    /// g₁(x, y) — or g(x, y, t) — as text.
+pub enum FieldSpec {
+    /// f follows only the change of area. (A struct variant, so that a
+    /// stray field next to it is an error rather than ignored.)
+    Uniform {},
+    /// g₁(x, y, z) — or g(x, y, z, t) — as text.
     Expression {
-        /// The expression, in x, y and optionally t.
+        /// The expression, in x, y, z and optionally t.
         f: String,
-        /// `linear` (default) or `inverse`.
-        #[serde(default)]
-        path: TimePath,
     },
     /// g₁ from a PNG picture.
     Image {
@@ -148,23 +160,109 @@ pub enum JacobianSpec {
         lower: [f64; 2],
         /// Upper corner.
         upper: [f64; 2],
-        /// g₁ on black pixels (white gives 1).
-        #[serde(default = "default_floor")]
-        floor: f64,
-        /// Bright parts small instead of dark ones.
+        /// `dark` (default) or `bright`: the pixels that get small cells.
         #[serde(default)]
-        invert: bool,
-        /// Passes of a 3×3 box filter.
+        small: SmallWhere,
+        /// Cell size on the small-cell extreme relative to the rest, as a
+        /// length (converted to a Jacobian ratio by the dimension).
+        #[serde(default)]
+        size_ratio: Option<f64>,
+        /// The same as an area (2D) or volume (3D) ratio.
+        #[serde(default)]
+        jacobian_ratio: Option<f64>,
+        /// Passes of a 3×3 box filter over the picture first.
         #[serde(default)]
         smooth: usize,
-        /// `linear` (default) or `inverse`.
+    },
+    /// Small cells along an interface.
+    Interface {
+        /// A curve (2D) or surface (3D), as in `[[boundary]]` shapes.
         #[serde(default)]
-        path: TimePath,
+        shape: Option<toml::Value>,
+        /// Or a level set φ(x, y, z) = 0.
+        #[serde(default)]
+        level_set: Option<String>,
+        /// Width of the band of small cells (the 1/e distance).
+        width: f64,
+        /// Smallest to background cell size, as a length.
+        #[serde(default)]
+        size_ratio: Option<f64>,
+        /// The same as an area (2D) or volume (3D) ratio.
+        #[serde(default)]
+        jacobian_ratio: Option<f64>,
+    },
+    /// The smallest of the fields in `of`.
+    Min {
+        /// The fields.
+        of: Vec<FieldSpec>,
+    },
+    /// The product of the fields in `of`.
+    Product {
+        /// The fields.
+        of: Vec<FieldSpec>,
     },
 }
 
-fn default_floor() -> f64 {
-    0.2
+impl Default for FieldSpec {
+    fn default() -> Self {
+        FieldSpec::Uniform {}
+    }
+}
+
+/// The Jacobian ratio from exactly one of a length and a Jacobian ratio.
+fn jacobian_ratio(size: Option<f64>, jac: Option<f64>, dim: usize, here: &str) -> Result<f64, String> {
+    match (size, jac) {
+        (Some(s), None) if s > 0.0 && s.is_finite() => Ok(s.powi(dim as i32)),
+        (None, Some(j)) if j > 0.0 && j.is_finite() => Ok(j),
+        (Some(v), None) | (None, Some(v)) => Err(format!("{here}: the ratio must be a positive number, got {v}")),
+        (Some(_), Some(_)) => Err(format!("{here}: give `size_ratio` or `jacobian_ratio`, not both")),
+        (None, None) => Err(format!("{here}: needs `size_ratio` (a length ratio) or `jacobian_ratio` (an area/volume ratio)")),
+    }
+}
+
+impl FieldSpec {
+    /// Builds the target; `here` names the field in errors (`jacobian`,
+    /// `jacobian.of[1]`, ...).
+    fn build(&self, here: &str, dim: usize, base_dir: &Path) -> Result<Target, String> {
+        Ok(match self {
+            FieldSpec::Uniform {} => Target::Uniform,
+            FieldSpec::Expression { f } => Target::Expression(Expr::parse(f, &EXPR_VARS).map_err(|e| format!("field `{here}.f`: {e}"))?),
+            FieldSpec::Image { file, lower, upper, small, size_ratio, jacobian_ratio: jr, smooth } => {
+                let r = jacobian_ratio(*size_ratio, *jr, dim, &format!("field `{here}`"))?;
+                let image = ImageField::open(&base_dir.join(file), *lower, *upper, r, *small, *smooth).map_err(|e| match e {
+                    JacobianError::Image { .. } => format!("field `{here}.file`: {e}"),
+                    other => format!("field `{here}`: {other}"),
+                })?;
+                Target::Image(image)
+            }
+            FieldSpec::Interface { shape, level_set, width, size_ratio, jacobian_ratio: jr } => {
+                let r = jacobian_ratio(*size_ratio, *jr, dim, &format!("field `{here}`"))?;
+                let locus = match (shape, level_set) {
+                    (Some(v), None) if dim == 2 => {
+                        let spec: ShapeSpec = v.clone().try_into().map_err(|e| format!("field `{here}.shape`: {}", e.to_string().trim_end()))?;
+                        Locus::Curve(spec.build().map_err(|e| format!("field `{here}.shape`: {e}"))?)
+                    }
+                    (Some(v), None) => {
+                        let spec: SurfaceSpec = v.clone().try_into().map_err(|e| format!("field `{here}.shape`: {}", e.to_string().trim_end()))?;
+                        Locus::Surface(spec.build().map_err(|e| format!("field `{here}.shape`: {e}"))?)
+                    }
+                    (None, Some(text)) => Locus::LevelSet(Expr::parse(text, &EXPR_VARS).map_err(|e| format!("field `{here}.level_set`: {e}"))?),
+                    _ => return Err(format!("field `{here}`: an interface needs exactly one of `shape` and `level_set`")),
+                };
+                Target::Interface(Interface::new(locus, *width, r).map_err(|e| format!("field `{here}`: {e}"))?)
+            }
+            FieldSpec::Min { of } | FieldSpec::Product { of } => {
+                if of.is_empty() {
+                    return Err(format!("field `{here}.of`: lists no fields"));
+                }
+                let parts = of.iter().enumerate().map(|(k, f)| f.build(&format!("{here}.of[{k}]"), dim, base_dir)).collect::<Result<Vec<_>, _>>()?;
+                if parts.iter().any(Target::uses_time) {
+                    return Err(format!("field `{here}`: t may only appear in an expression that is the whole field, not inside `of`"));
+                }
+                if matches!(self, FieldSpec::Min { .. }) { Target::Min(parts) } else { Target::Product(parts) }
+            }
+        })
+    }
 }
 
 /// The `[time]` table.
@@ -219,6 +317,30 @@ pub struct OutputSpec {
     /// normal points to are left out).
     #[serde(default)]
     pub clip: Option<ClipSpec>,
+    /// What colours the cells: `jf` (default) or `size`.
+    #[serde(default)]
+    pub colour: Colour,
+}
+
+/// What the pictures colour cells by.
+#[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Colour {
+    /// J/f, achieved over prescribed Jacobian: 1 is perfect.
+    #[default]
+    Jf,
+    /// Cell size over its starting size: where adaptation put small cells.
+    Size,
+}
+
+impl Colour {
+    /// The label above the colour bar.
+    pub fn label(self) -> &'static str {
+        match self {
+            Colour::Jf => "J/f",
+            Colour::Size => "size/start",
+        }
+    }
 }
 
 /// The camera of 3D pictures.
@@ -250,7 +372,7 @@ fn default_width() -> u32 {
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { frames: Vec::new(), animation: false, width: default_width(), camera: None, clip: None }
+        OutputSpec { frames: Vec::new(), animation: false, width: default_width(), camera: None, clip: None, colour: Colour::Jf }
     }
 }
 
@@ -364,7 +486,7 @@ impl Case {
         if dim == 2 && (self.output.camera.is_some() || self.output.clip.is_some()) {
             return Err(err("fields `output.camera` and `output.clip` are for 3D cases".into()));
         }
-        let field = self.field(file, base_dir)?;
+        let field = self.field(file, base_dir, dim)?;
         let mut output = self.output.clone();
         output.frames.sort_by(f64::total_cmp);
         output.frames.dedup();
@@ -394,9 +516,6 @@ impl Case {
             let (parts, face_part) = self.parts(file, &BOX_FACES, build_surface)?;
             mesh.faces.iter_mut().for_each(|f| f.part = face_part[f.part]);
             mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
-            if matches!(field.target, Target::Image(_)) {
-                return Err(err("field `jacobian`: image fields are 2D only".into()));
-            }
             let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
             check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
             Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output }))
@@ -452,20 +571,14 @@ impl Case {
         Ok((parts, side_part))
     }
 
-    fn field(&self, file: &str, base_dir: &Path) -> Result<JacobianField, CaseError> {
+    fn field(&self, file: &str, base_dir: &Path, dim: usize) -> Result<JacobianField, CaseError> {
         let err = |message: String| CaseError { file: file.to_string(), message };
-        Ok(match &self.jacobian {
-            JacobianSpec::Uniform => JacobianField::uniform(),
-            JacobianSpec::Expression { f, path } => {
-                let expr = Expr::parse(f, &EXPR_VARS).map_err(|e| err(format!("field `jacobian.f`: {e}")))?;
-                JacobianField { target: Target::Expression(expr), path: *path }
-            }
-            JacobianSpec::Image { file: img, lower, upper, floor, invert, smooth, path } => {
-                let full = base_dir.join(img);
-                let image = ImageField::open(&full, *lower, *upper, *floor, *invert, *smooth).map_err(|e| err(format!("field `jacobian.file`: {e}")))?;
-                JacobianField { target: Target::Image(image), path: *path }
-            }
-        })
+        let target = self.jacobian.field.build("jacobian", dim, base_dir).map_err(err)?;
+        let floor = self.jacobian.floor.unwrap_or(0.0);
+        if !(floor >= 0.0 && floor.is_finite()) {
+            return Err(err(format!("field `jacobian.floor`: must be a positive number, got {floor}")));
+        }
+        Ok(JacobianField { target, path: self.jacobian.path.unwrap_or_default(), floor })
     }
 }
 

@@ -5,14 +5,14 @@
 //! Outputs are produced in memory and written only when the run has
 //! succeeded, each file atomically, so a failed run leaves nothing behind.
 
-use crate::case::{AnySetup, CaseError, OutputSpec, Setup};
+use crate::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
 use crate::deform::{DeformError, Deformation, Integrator, Q1Mesh};
 use crate::io::msh::{hex_msh_string, msh_string, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::write_atomic;
 use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
 use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
-use crate::render::{gif_bytes, png_bytes, render_hex, render_mesh, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
+use crate::render::{ColourMap, gif_bytes, png_bytes, render_hex, render_mesh, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -167,6 +167,10 @@ pub struct Look<'a, const D: usize> {
     pub title: String,
     /// Width in pixels.
     pub width: u32,
+    /// What the colours show, above the colour bar.
+    pub label: &'static str,
+    /// The colour map (automatic when `None`).
+    pub colour_map: Option<ColourMap>,
     /// The case's output options (3D camera and clip).
     pub output: &'a OutputSpec,
 }
@@ -194,7 +198,7 @@ impl Outputs<2, 4> for QuadMesh {
     }
     fn draw(&self, nodes: &[Point2], values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
         let m = QuadMesh { nodes: nodes.to_vec(), ..self.clone() };
-        let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), ..Default::default() };
+        let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
         render_mesh(&m, values, &opts)
     }
 }
@@ -222,7 +226,7 @@ impl Outputs<3, 8> for HexMesh {
     }
     fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
         let m = HexMesh { nodes: nodes.to_vec(), ..self.clone() };
-        let mut opts = RenderOptions3 { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), ..Default::default() };
+        let mut opts = RenderOptions3 { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
         if let Some(c) = look.output.camera {
             opts.camera = Camera { azimuth_deg: c.azimuth, elevation_deg: c.elevation, distance: c.distance };
         }
@@ -252,7 +256,15 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let mut def = Deformation::<M, D, N>::new(mesh, parts, field, options)?;
     // frames are drawn at the end, when the box around all of them is known
     let every = (nominal_steps / 40).max(1);
-    let snapshot = |d: &Deformation<M, D, N>| (d.t, d.mesh.nodes().to_vec(), d.jf_now());
+    let start_sizes = mesh_start_sizes(&def);
+    let colour = output.colour;
+    let values = |d: &Deformation<M, D, N>| -> Result<Vec<f64>, DeformError> {
+        match colour {
+            Colour::Jf => d.jf_now(),
+            Colour::Size => Ok(d.mesh.cell_sizes(d.mesh.nodes()).iter().zip(&start_sizes).map(|(a, a0)| a / a0).collect()),
+        }
+    };
+    let snapshot = |d: &Deformation<M, D, N>| (d.t, d.mesh.nodes().to_vec(), values(d));
     let mut stills = Vec::new();
     let mut anim = if output.animation { vec![snapshot(&def)] } else { Vec::new() };
     def.run(
@@ -271,8 +283,8 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     }
     let norm = def.normalisation_now()?;
     let ratios = def.jf_now()?;
-    let start_sizes = def.mesh.cell_sizes(&def.start);
     let jf = jf_stats(&ratios, &start_sizes);
+    let shown = values(&def)?;
     let boundary_distance_max = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
 
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
@@ -282,9 +294,18 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     files.push(("mesh.vtu".into(), vtu.into_bytes()));
     let node_sets = [def.start.as_slice(), def.mesh.nodes()].into_iter().chain(stills.iter().chain(&anim).map(|s| s.1.as_slice()));
     let bounds = frame_bounds(node_sets);
-    let range = symmetric_range(&ratios);
-    let look = |title: String, width: u32| Look { bounds, range, title, width, output: &output };
-    let main_picture = def.mesh.draw(def.mesh.nodes(), &ratios, &look(format!("{name}: J/f at t = 1"), output.width))?;
+    let range = match colour {
+        Colour::Jf => symmetric_range(&ratios),
+        Colour::Size => {
+            let r = Range::of(stills.iter().chain(&anim).filter_map(|s| s.2.as_ref().ok()).flatten().chain(&shown).copied());
+            (r.min, r.max)
+        }
+    };
+    let label = colour.label();
+    // sizes read best on a sequential map: the smallest cells darkest
+    let colour_map = (colour == Colour::Size).then_some(ColourMap::Sequential);
+    let look = |title: String, width: u32| Look { bounds, range, title, width, label, colour_map, output: &output };
+    let main_picture = def.mesh.draw(def.mesh.nodes(), &shown, &look(format!("{name}: {label} at t = 1"), output.width))?;
     files.push(("mesh.png".into(), png_bytes(&main_picture)?));
     for (t, nodes, values) in stills {
         let picture = def.mesh.draw(&nodes, &values?, &look(format!("t = {t:.2}"), output.width))?;
@@ -325,6 +346,11 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     files.push(("report.json".into(), json.into_bytes()));
     write_all(out_dir, &files)?;
     Ok(report)
+}
+
+/// The starting cell sizes of a run.
+fn mesh_start_sizes<M: Outputs<D, N>, const D: usize, const N: usize>(d: &Deformation<M, D, N>) -> Vec<f64> {
+    d.mesh.cell_sizes(&d.start)
 }
 
 /// A colour range for J/f symmetric about 1, so 1 is white.

@@ -139,7 +139,11 @@ fn run_and_print(setup: AnySetup, out: &Path) -> Result<()> {
     bar.finish();
     println!("case {}: {} cells, {} nodes, {} steps ({} halved)", report.case, report.cells, report.nodes, report.steps, report.halved_steps);
     print!("{}", deformesh::quality::format_quality(&report.quality));
-    println!("J/f: min {:.4}  max {:.4}  L2(J/f-1) {:.3e}", report.jf.min, report.jf.max, report.jf.l2_error);
+    println!(
+        "J/f: min {:.4}  max {:.4}  L2(J/f-1) {:.3e}  equidistribution CoV {:.3e}",
+        report.jf.min, report.jf.max, report.jf.l2_error, report.jf.equidistribution_cov
+    );
+    println!("cell size ratio largest/smallest: {:.3}", report.quality.cell_size.max / report.quality.cell_size.min);
     println!("boundary distance max: {:.3e}", report.boundary_distance_max);
     println!(
         "time: assembly {:.3}s  analyse {:.3}s  factor {:.3}s  solve {:.3}s  total {:.3}s",

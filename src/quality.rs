@@ -167,6 +167,11 @@ pub struct JfStats {
     pub max: f64,
     /// sqrt(Σ |K₀| (J/f − 1)² / Σ |K₀|).
     pub l2_error: f64,
+    /// Equidistribution: the coefficient of variation (standard deviation
+    /// over mean, across cells) of |K_t| / ∫_{K₀} f — each cell's size
+    /// measured in the monitor 1/f, relative to its start. 0 is perfect
+    /// equidistribution.
+    pub equidistribution_cov: f64,
 }
 
 /// Computes [`JfStats`] from per-cell ratios and starting areas.
@@ -174,7 +179,10 @@ pub fn jf_stats(ratios: &[f64], start_areas: &[f64]) -> JfStats {
     let r = Range::of(ratios.iter().copied());
     let total: f64 = start_areas.iter().sum();
     let l2 = ratios.iter().zip(start_areas).map(|(q, a)| a * (q - 1.0) * (q - 1.0)).sum::<f64>() / total;
-    JfStats { min: r.min, max: r.max, l2_error: l2.sqrt() }
+    let n = ratios.len().max(1) as f64;
+    let mean = ratios.iter().sum::<f64>() / n;
+    let var = ratios.iter().map(|q| (q - mean) * (q - mean)).sum::<f64>() / n;
+    JfStats { min: r.min, max: r.max, l2_error: l2.sqrt(), equidistribution_cov: var.sqrt() / mean }
 }
 
 #[cfg(test)]
@@ -206,6 +214,10 @@ mod tests {
         assert!(r.iter().all(|q| (q - 1.0).abs() < 1e-14));
         let areas: Vec<f64> = (0..9).map(|c| start.cell_area(c)).collect();
         assert!(jf_stats(&r, &areas).l2_error < 1e-14);
+        assert!(jf_stats(&r, &areas).equidistribution_cov < 1e-14);
+        // ratios 0.5 and 1.5: mean 1, standard deviation 0.5
+        let s = jf_stats(&[0.5, 1.5], &[1.0, 1.0]);
+        assert!((s.equidistribution_cov - 0.5).abs() < 1e-15 && (s.l2_error - 0.5).abs() < 1e-15);
     }
 }
 

@@ -194,15 +194,76 @@ fn expression_syntax_error() {
 
 #[test]
 fn image_file_missing() {
-    let text = with_jacobian("type = \"image\"\nfile = \"missing.png\"\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\n");
+    let text = with_jacobian("type = \"image\"\nfile = \"missing.png\"\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\njacobian_ratio = 0.2\n");
     run_bad_case(&text, &[CASE, "field `jacobian.file`", "missing.png"]);
 }
 
 #[test]
 fn image_file_not_png() {
-    let text = with_jacobian("type = \"image\"\nfile = \"garbage.png\"\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\n");
+    let text = with_jacobian("type = \"image\"\nfile = \"garbage.png\"\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\njacobian_ratio = 0.2\n");
     let garbage: Vec<u8> = (0..300u32).map(|i| (i * 37 % 251) as u8).collect();
     run_bad_case_with(&text, &[("garbage.png", &garbage)], &[CASE, "field `jacobian.file`", "garbage.png"]);
+}
+
+const CIRCLE_BAND: &str = "type = \"interface\"\nshape = { type = \"circle\", centre = [0.5, 0.5], radius = 0.3 }\n";
+
+#[test]
+fn interface_width_not_positive() {
+    for w in ["0.0", "-0.1"] {
+        let text = with_jacobian(&format!("{CIRCLE_BAND}width = {w}\nsize_ratio = 0.5\n"));
+        run_bad_case(&text, &[CASE, "field `jacobian`", "interface width must be a positive number"]);
+    }
+}
+
+#[test]
+fn interface_ratio_missing_twice_or_not_positive() {
+    let text = with_jacobian(&format!("{CIRCLE_BAND}width = 0.1\n"));
+    run_bad_case(&text, &[CASE, "field `jacobian`", "needs `size_ratio`"]);
+    let text = with_jacobian(&format!("{CIRCLE_BAND}width = 0.1\nsize_ratio = 0.5\njacobian_ratio = 0.25\n"));
+    run_bad_case(&text, &[CASE, "not both"]);
+    let text = with_jacobian(&format!("{CIRCLE_BAND}width = 0.1\nsize_ratio = -0.5\n"));
+    run_bad_case(&text, &[CASE, "field `jacobian`", "must be a positive number, got -0.5"]);
+}
+
+#[test]
+fn interface_needs_one_locus_and_a_valid_shape() {
+    let text = with_jacobian("type = \"interface\"\nwidth = 0.1\nsize_ratio = 0.5\n");
+    run_bad_case(&text, &[CASE, "exactly one of `shape` and `level_set`"]);
+    let text = with_jacobian("type = \"interface\"\nshape = { type = \"circle\", centre = [0.5, 0.5], radius = -0.3 }\nwidth = 0.1\nsize_ratio = 0.5\n");
+    run_bad_case(&text, &[CASE, "field `jacobian.shape`", "radius"]);
+    let text = with_jacobian("type = \"interface\"\nlevel_set = \"x^2 + * y\"\nwidth = 0.1\nsize_ratio = 0.5\n");
+    run_bad_case(&text, &[CASE, "field `jacobian.level_set`"]);
+}
+
+#[test]
+fn combination_errors_name_the_nested_field() {
+    let text = with_jacobian("type = \"min\"\nof = []\n");
+    run_bad_case(&text, &[CASE, "field `jacobian.of`: lists no fields"]);
+    let text = with_jacobian("type = \"product\"\n[[jacobian.of]]\ntype = \"expression\"\nf = \"1 + x\"\n[[jacobian.of]]\ntype = \"interface\"\nlevel_set = \"x - 0.5\"\nwidth = -1.0\nsize_ratio = 0.5\n");
+    run_bad_case(&text, &[CASE, "field `jacobian.of[1]`", "width must be a positive number"]);
+    let text = with_jacobian("type = \"min\"\n[[jacobian.of]]\ntype = \"expression\"\nf = \"1 + t\"\n");
+    run_bad_case(&text, &[CASE, "t may only appear"]);
+    // path and floor belong to the whole field, not to a part of it
+    let text = with_jacobian("type = \"min\"\n[[jacobian.of]]\ntype = \"expression\"\nf = \"1 + x\"\npath = \"linear\"\n");
+    run_bad_case(&text, &[CASE, "unknown field `path`"]);
+    // a field that is not positive inside a product is found
+    let text = with_jacobian("type = \"product\"\n[[jacobian.of]]\ntype = \"expression\"\nf = \"x - 0.5\"\n[[jacobian.of]]\ntype = \"uniform\"\n");
+    run_bad_case(&text, &["not positive", "at (x, y, z) = ("]);
+}
+
+#[test]
+fn a_floor_keeps_a_field_positive() {
+    // the field of `non_positive_jacobian`, floored: the run goes through
+    let dir = TempDir::new().unwrap();
+    let case = write_case(dir.path(), &with_jacobian("type = \"expression\"\nf = \"x - 0.5\"\nfloor = 0.3\n"));
+    let out = dir.path().join("out");
+    let ran = deformesh(dir.path(), &["run", path_str(&case), "-o", path_str(&out)]);
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+    let report = read_json(&out.join("report.json"));
+    assert_eq!(report["invalid_cells"], 0);
+    assert!(report["jf"]["equidistribution_cov"].as_f64().unwrap() < 0.1);
+    let bad = with_jacobian("type = \"expression\"\nf = \"x - 0.5\"\nfloor = -0.3\n");
+    run_bad_case(&bad, &[CASE, "field `jacobian.floor`"]);
 }
 
 #[test]
