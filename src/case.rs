@@ -7,6 +7,8 @@
 use crate::deform::{BoundaryPart, BoundaryShape, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
 use crate::expr::Expr;
 use crate::geometry::ShapeSpec;
+use crate::highorder::curve::CurveOptions;
+use crate::highorder::{check_order, Spacing};
 use crate::geometry3::SurfaceSpec;
 use crate::jacobian::{lift, ImageField, JacobianError, Interface, JacobianField, Locus, SmallWhere, Target, TimePath, EXPR_VARS};
 use crate::mesh::{HexMesh, QuadMesh, BOX_FACES, BOX_SIDES};
@@ -45,6 +47,9 @@ pub struct Case {
     /// What to write.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Algorithms 2 and 3: curve the result to order-p elements.
+    #[serde(default)]
+    pub highorder: Option<HighOrderSpec>,
     /// The text it was parsed from (for line numbers in errors).
     #[serde(skip)]
     pub source: String,
@@ -297,6 +302,20 @@ impl Default for TimeSpec {
     }
 }
 
+/// The `[highorder]` table.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HighOrderSpec {
+    /// Element order p, 1 ..= 4.
+    pub order: usize,
+    /// `equispaced` (default) or `gauss_lobatto` element nodes.
+    #[serde(default)]
+    pub spacing: Spacing,
+    /// Steps of Algorithm 2 (default: half those of Algorithm 1, at least 4).
+    #[serde(default)]
+    pub steps: Option<usize>,
+}
+
 /// The `[output]` table.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -394,6 +413,8 @@ pub struct Setup<M = QuadMesh, const D: usize = 2> {
     pub options: DeformOptions,
     /// Output options.
     pub output: OutputSpec,
+    /// Algorithms 2 and 3, if asked for.
+    pub highorder: Option<CurveOptions>,
 }
 
 /// A 2D or a 3D setup.
@@ -487,6 +508,18 @@ impl Case {
             return Err(err("fields `output.camera` and `output.clip` are for 3D cases".into()));
         }
         let field = self.field(file, base_dir, dim)?;
+        let highorder = match &self.highorder {
+            None => None,
+            Some(h) => {
+                check_order(h.order).map_err(|e| err(format!("field `highorder.order`: {e}")))?;
+                if h.steps == Some(0) {
+                    return Err(err("field `highorder.steps`: must be at least 1".into()));
+                }
+                let steps = h.steps.unwrap_or((self.time.steps / 2).max(4));
+                let flow = DeformOptions { integrator: self.time.integrator, div_weight: self.time.div_weight, solver: self.time.solver, ..Default::default() };
+                Some(CurveOptions { order: h.order, spacing: h.spacing, steps, flow, ..Default::default() })
+            }
+        };
         let mut output = self.output.clone();
         output.frames.sort_by(f64::total_cmp);
         output.frames.dedup();
@@ -510,7 +543,7 @@ impl Case {
             mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
             let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
             check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
-            Ok(AnySetup::Quad(Setup { name, mesh, parts, field, options, output }))
+            Ok(AnySetup::Quad(Setup { name, mesh, parts, field, options, output, highorder }))
         } else {
             let mut mesh = HexMesh::structured_box([m.lower[0], m.lower[1], m.lower[2]], [m.upper[0], m.upper[1], m.upper[2]], [m.cells[0], m.cells[1], m.cells[2]]);
             let (parts, face_part) = self.parts(file, &BOX_FACES, build_surface)?;
@@ -518,7 +551,7 @@ impl Case {
             mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
             let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
             check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
-            Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output }))
+            Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output, highorder }))
         }
     }
 

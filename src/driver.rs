@@ -6,12 +6,17 @@
 //! succeeded, each file atomically, so a failed run leaves nothing behind.
 
 use crate::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
-use crate::deform::{DeformError, Deformation, Integrator, Q1Mesh};
+use crate::deform::refine::Subdividable;
+use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh};
+use crate::highorder::curve::{curve, CurveError, CurveOptions, Curved, CurvedQuality};
+use crate::highorder::Spacing;
+use crate::io::curved::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::write_atomic;
 use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
 use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
+use crate::render::{render_curved_hex, render_curved_quads};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hex, render_mesh, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -29,6 +34,19 @@ pub enum RunError {
     /// The finished mesh has invalid cells (never written as if fine).
     #[error("the deformed mesh has {} invalid cell(s): {:?}", .0.len(), &.0[..(.0.len().min(20))])]
     Invalid(Vec<usize>),
+    /// Curved elements whose det J is not certified positive.
+    #[error("the curved mesh of order {order} has {} element(s) not certified valid (det J not positive over the whole element): {:?}; certified min det J {min_det:.3e}", cells.len(), &cells[..(cells.len().min(20))])]
+    InvalidCurved {
+        /// The order.
+        order: usize,
+        /// The elements.
+        cells: Vec<usize>,
+        /// The certified lower bound of det J.
+        min_det: f64,
+    },
+    /// Algorithms 2 and 3 failed.
+    #[error(transparent)]
+    Curve(#[from] CurveError),
     /// A picture failed.
     #[error("drawing the picture failed")]
     Render(#[from] RenderError),
@@ -52,7 +70,12 @@ impl RunError {
     /// The process exit code: 2 when the mesh tangles or is invalid, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Invalid(_) | RunError::Deform(DeformError::Tangled { .. }) | RunError::Deform(DeformError::InvalidStart(_)) => 2,
+            RunError::Invalid(_)
+            | RunError::InvalidCurved { .. }
+            | RunError::Deform(DeformError::Tangled { .. })
+            | RunError::Deform(DeformError::InvalidStart(_))
+            | RunError::Curve(CurveError::InvalidCoarse(_))
+            | RunError::Curve(CurveError::Deform(DeformError::Tangled { .. })) => 2,
             _ => 1,
         }
     }
@@ -121,10 +144,33 @@ pub struct Report {
     pub normalisation_c: f64,
     /// Solver used.
     pub solver: String,
+    /// Algorithms 2 and 3, when asked for.
+    pub highorder: Option<HighOrderReport>,
     /// Seconds.
     pub time: Timings,
     /// Files written.
     pub outputs: Vec<String>,
+}
+
+/// The figures of Algorithms 2 and 3.
+#[derive(Clone, Debug, Serialize)]
+pub struct HighOrderReport {
+    /// Validity and geometry of the curved mesh.
+    pub quality: CurvedQuality,
+    /// Node spacing in the elements.
+    pub spacing: Spacing,
+    /// Accepted steps of Algorithm 2.
+    pub steps: usize,
+    /// Halved steps of Algorithm 2.
+    pub halved_steps: usize,
+    /// Seconds of Algorithm 1 (without outputs), Algorithm 2, certification.
+    pub algorithm1_s: f64,
+    /// Seconds of Algorithm 2 (subdivision and flow).
+    pub algorithm2_s: f64,
+    /// Seconds of the Bézier certification of every element.
+    pub certify_s: f64,
+    /// What the figures mean.
+    pub definitions: &'static str,
 }
 
 /// Definitions printed with the figures.
@@ -139,7 +185,7 @@ pub struct Definitions {
 }
 
 /// What a kind of mesh writes and draws: the per-dimension end of a run.
-pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> {
+pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D, N> {
     /// What the figures mean.
     const DEFINITIONS: Definitions;
     /// Validity and shape figures.
@@ -155,6 +201,10 @@ pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> {
     /// A picture of the mesh at positions `nodes`, cells coloured by
     /// `values`.
     fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
+    /// Algorithms 2 and 3 on this mesh.
+    fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions) -> Result<Curved<D>, CurveError>;
+    /// A picture of a curved mesh, elements coloured by `values`.
+    fn draw_curved(mesh: &CurvedMesh<D>, values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
 }
 
 /// What every picture of one run shares, and its title and width.
@@ -201,6 +251,13 @@ impl Outputs<2, 4> for QuadMesh {
         let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
         render_mesh(&m, values, &opts)
     }
+    fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions) -> Result<Curved<2>, CurveError> {
+        curve(self, parts, opts)
+    }
+    fn draw_curved(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
+        let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
+        render_curved_quads(mesh, values, &opts)
+    }
 }
 
 impl Outputs<3, 8> for HexMesh {
@@ -226,13 +283,24 @@ impl Outputs<3, 8> for HexMesh {
     }
     fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
         let m = HexMesh { nodes: nodes.to_vec(), ..self.clone() };
-        let mut opts = RenderOptions3 { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
-        if let Some(c) = look.output.camera {
-            opts.camera = Camera { azimuth_deg: c.azimuth, elevation_deg: c.elevation, distance: c.distance };
-        }
-        opts.clip = look.output.clip.map(|c| ClipPlane { point: c.point, normal: c.normal });
-        render_hex(&m, values, &opts)
+        render_hex(&m, values, &options3(look))
     }
+    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions) -> Result<Curved<3>, CurveError> {
+        curve(self, parts, opts)
+    }
+    fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        render_curved_hex(mesh, values, &options3(look))
+    }
+}
+
+/// The 3D render options of a look.
+fn options3(look: &Look<3>) -> RenderOptions3 {
+    let mut opts = RenderOptions3 { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
+    if let Some(c) = look.output.camera {
+        opts.camera = Camera { azimuth_deg: c.azimuth, elevation_deg: c.elevation, distance: c.distance };
+    }
+    opts.clip = look.output.clip.map(|c| ClipPlane { point: c.point, normal: c.normal });
+    opts
 }
 
 /// Runs a prepared 2D or 3D case; writes into `out_dir` only on success.
@@ -250,7 +318,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     mut progress: impl FnMut(Progress),
 ) -> Result<Report, RunError> {
     let clock = Instant::now();
-    let Setup { name, mesh, parts, field, options, output } = setup;
+    let Setup { name, mesh, parts, field, options, output, highorder } = setup;
     let nominal_steps = options.steps;
     let integrator = options.integrator;
     let mut def = Deformation::<M, D, N>::new(mesh, parts, field, options)?;
@@ -281,6 +349,17 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     if !quality.invalid_cells.is_empty() {
         return Err(RunError::Invalid(quality.invalid_cells));
     }
+    let algorithm1_s = clock.elapsed().as_secs_f64();
+    let curved = match &highorder {
+        Some(opts) => {
+            let c = def.mesh.curve(def.parts(), opts)?;
+            if !c.quality.invalid_elements.is_empty() {
+                return Err(RunError::InvalidCurved { order: opts.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
+            }
+            Some(c)
+        }
+        None => None,
+    };
     let norm = def.normalisation_now()?;
     let ratios = def.jf_now()?;
     let jf = jf_stats(&ratios, &start_sizes);
@@ -288,10 +367,19 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let boundary_distance_max = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
 
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
-    files.push(("mesh.msh".into(), def.mesh.msh().into_bytes()));
+    // with high order, mesh.* is the curved mesh and linear.* Algorithm 1's
+    let linear = if curved.is_some() { "linear" } else { "mesh" };
+    files.push((format!("{linear}.msh"), def.mesh.msh().into_bytes()));
     let scaled = def.mesh.scaled_jacobians();
     let vtu = def.mesh.vtu(&[("J/f", &ratios), ("scaled_jacobian", &scaled), ("start_size", &start_sizes)])?;
-    files.push(("mesh.vtu".into(), vtu.into_bytes()));
+    files.push((format!("{linear}.vtu"), vtu.into_bytes()));
+    if let Some(c) = &curved {
+        files.push(("mesh.msh".into(), c.mesh.msh_string()?.into_bytes()));
+        let min_det: Vec<f64> = c.certificates.iter().map(|x| x.min_det_lower).collect();
+        let sj: Vec<f64> = c.certificates.iter().map(|x| x.min_scaled_jacobian).collect();
+        let vtu = c.mesh.vtu_string(&[("J/f", &ratios), ("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])?;
+        files.push(("mesh.vtu".into(), vtu.into_bytes()));
+    }
     let node_sets = [def.start.as_slice(), def.mesh.nodes()].into_iter().chain(stills.iter().chain(&anim).map(|s| s.1.as_slice()));
     let bounds = frame_bounds(node_sets);
     let range = match colour {
@@ -306,7 +394,14 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let colour_map = (colour == Colour::Size).then_some(ColourMap::Sequential);
     let look = |title: String, width: u32| Look { bounds, range, title, width, label, colour_map, output: &output };
     let main_picture = def.mesh.draw(def.mesh.nodes(), &shown, &look(format!("{name}: {label} at t = 1"), output.width))?;
-    files.push(("mesh.png".into(), png_bytes(&main_picture)?));
+    match &curved {
+        Some(c) => {
+            files.push(("linear.png".into(), png_bytes(&main_picture)?));
+            let picture = M::draw_curved(&c.mesh, &shown, &look(format!("{name}: order {} elements, {label}", c.mesh.p), output.width))?;
+            files.push(("mesh.png".into(), png_bytes(&picture)?));
+        }
+        None => files.push(("mesh.png".into(), png_bytes(&main_picture)?)),
+    }
     for (t, nodes, values) in stills {
         let picture = def.mesh.draw(&nodes, &values?, &look(format!("t = {t:.2}"), output.width))?;
         files.push((format!("frame_t{t:.2}.png"), png_bytes(&picture)?));
@@ -338,6 +433,16 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
         boundary_distance_max,
         normalisation_c: norm.c,
         solver: def.solver_name().to_string(),
+        highorder: curved.as_ref().map(|c| HighOrderReport {
+            quality: c.quality.clone(),
+            spacing: c.mesh.spacing,
+            steps: c.stats.steps,
+            halved_steps: c.stats.halved,
+            algorithm1_s,
+            algorithm2_s: c.seconds.0,
+            certify_s: c.seconds.1,
+            definitions: "det J of the order-p Lagrange map from the reference [0,1]^d (Gmsh's [-1,1]^d gives 2^-d of it): min_det_j is a certified lower bound from Bezier coefficients with subdivision, min_det_j_attained a value det J takes; scaled Jacobian det J/(product of column norms of J), per element its minimum on a (3p+1)^d grid; boundary distances to the exact shapes of moving (and curved slip) parts, at the nodes and at samples of the curved boundary",
+        }),
         time: Timings { assembly_s: stats.assembly.as_secs_f64(), analyze_s: stats.analyze.as_secs_f64(), factor_s: stats.factor.as_secs_f64(), solve_s: stats.solve.as_secs_f64(), total_s: 0.0 },
         outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once("report.json".to_string())).collect(),
     };

@@ -120,6 +120,11 @@ fn corner(a: usize, d: usize) -> f64 {
     }
 }
 
+/// Reference coordinate along axis `d` of Q1 node `a` (0 or 1).
+pub fn q1_corner(a: usize, d: usize) -> f64 {
+    corner(a, d)
+}
+
 /// Shape functions of the reference cell [0,1]^D at ξ.
 pub fn q1_shape<const D: usize, const N: usize>(xi: [f64; D]) -> [f64; N] {
     std::array::from_fn(|a| (0..D).map(|d| if corner(a, d) == 1.0 { xi[d] } else { 1.0 - xi[d] }).product())

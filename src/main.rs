@@ -7,6 +7,7 @@ use deformesh::case::{Case, DEMO_CASE};
 use deformesh::case::AnySetup;
 use deformesh::deform::SolverChoice;
 use deformesh::driver::{run_any, Progress, RunError};
+use deformesh::highorder::curve::{certify_mesh, CurvedQuality};
 use deformesh::io::msh::MshError;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -93,13 +94,16 @@ fn run(cli: Cli) -> Result<()> {
             run_and_print(setup, &out).context("<built-in demo>")
         }
         Command::Quality { mesh, json } => {
-            let q = quality_of(&mesh)?;
+            let (text, value, invalid) = match quality_of(&mesh)? {
+                Figures::Linear(q) => (deformesh::quality::format_quality(&q), serde_json::to_value(&q)?, q.invalid_cells.len()),
+                Figures::Curved(q) => (format_curved(&q), serde_json::to_value(&q)?, q.invalid_elements.len()),
+            };
             if json {
-                println!("{}", serde_json::to_string_pretty(&q)?);
+                println!("{}", serde_json::to_string_pretty(&value)?);
             } else {
-                print!("{}", deformesh::quality::format_quality(&q));
+                print!("{text}");
             }
-            if !q.invalid_cells.is_empty() {
+            if invalid > 0 {
                 std::process::exit(2);
             }
             Ok(())
@@ -145,6 +149,17 @@ fn run_and_print(setup: AnySetup, out: &Path) -> Result<()> {
     );
     println!("cell size ratio largest/smallest: {:.3}", report.quality.cell_size.max / report.quality.cell_size.min);
     println!("boundary distance max: {:.3e}", report.boundary_distance_max);
+    if let Some(h) = &report.highorder {
+        print!("{}", format_curved(&h.quality));
+        println!(
+            "curved boundary distance: nodes {:.3e}  sampled {:.3e}",
+            h.quality.boundary_node_distance, h.quality.boundary_sample_distance
+        );
+        println!(
+            "time: algorithm 1 {:.3}s  algorithm 2 {:.3}s ({} steps, {} halved)  certification {:.3}s",
+            h.algorithm1_s, h.algorithm2_s, h.steps, h.halved_steps, h.certify_s
+        );
+    }
     println!(
         "time: assembly {:.3}s  analyse {:.3}s  factor {:.3}s  solve {:.3}s  total {:.3}s",
         report.time.assembly_s, report.time.analyze_s, report.time.factor_s, report.time.solve_s, report.time.total_s
@@ -198,17 +213,60 @@ fn folder_name(name: &str) -> String {
     if safe.trim_matches('.').is_empty() { "case".into() } else { safe }
 }
 
-/// Quality figures of a quad or hex MSH file (hexes when it has any).
-fn quality_of(path: &Path) -> Result<deformesh::quality::MeshQuality> {
-    use deformesh::io::msh::{read_hex_msh, read_msh};
-    // an I/O error names the file itself; a parse error gives a line
+/// The figures of a linear or a curved mesh.
+enum Figures {
+    Linear(deformesh::quality::MeshQuality),
+    Curved(CurvedQuality),
+}
+
+/// The figures of a curved mesh as lines a person reads.
+fn format_curved(q: &CurvedQuality) -> String {
+    format!(
+        "order {} elements {}  nodes {}\n\
+         det J (reference [0,1]^d, certified by Bezier bounds): min >= {:.6e} (attained {:.6e})  max <= {:.6e}\n\
+         scaled Jacobian (per element min): min {:.4}  max {:.4}\n\
+         invalid elements: {}{}\n",
+        q.order,
+        q.elements,
+        q.nodes,
+        q.min_det_j,
+        q.min_det_j_attained,
+        q.max_det_j,
+        q.scaled_jacobian.min,
+        q.scaled_jacobian.max,
+        q.invalid_elements.len(),
+        if q.invalid_elements.is_empty() { String::new() } else { format!(" {:?}", &q.invalid_elements[..q.invalid_elements.len().min(20)]) }
+    )
+}
+
+/// Quality figures of a linear or high-order quad or hex MSH file.
+fn quality_of(path: &Path) -> Result<Figures> {
+    use deformesh::io::curved::CurvedMesh;
     let named = |e: MshError| match e {
         MshError::Io { .. } => anyhow::Error::from(e),
         other => anyhow::Error::from(other).context(path.display().to_string()),
     };
+    let curved = |q: Result<(Vec<deformesh::highorder::Certificate>, CurvedQuality), deformesh::highorder::HighOrderError>| -> Result<Figures> {
+        Ok(Figures::Curved(q.map_err(anyhow::Error::from)?.1))
+    };
+    match linear_quality_of(path) {
+        Err(MshError::UnknownElementType { element_type: 10 | 36 | 37, .. }) => {
+            curved(certify_mesh(&CurvedMesh::<2>::read_msh(path).map_err(named)?))
+        }
+        Err(MshError::UnknownElementType { element_type: 12 | 92 | 93, .. }) => {
+            curved(certify_mesh(&CurvedMesh::<3>::read_msh(path).map_err(named)?))
+        }
+        Ok(q) => Ok(Figures::Linear(q)),
+        Err(e) => Err(named(e)),
+    }
+}
+
+/// Quality figures of a linear quad or hex MSH file (hexes when it has any).
+fn linear_quality_of(path: &Path) -> Result<deformesh::quality::MeshQuality, MshError> {
+    use deformesh::io::msh::{read_hex_msh, read_msh};
     match read_msh(path) {
         Ok(m) => Ok(deformesh::quality::mesh_quality(&m)),
-        Err(MshError::UnknownElementType { element_type: 5, .. }) => Ok(deformesh::quality::hex_mesh_quality(&read_hex_msh(path).map_err(named)?)),
-        Err(e) => Err(named(e)),
+        Err(MshError::UnknownElementType { element_type: 5, .. }) => Ok(deformesh::quality::hex_mesh_quality(&read_hex_msh(path)?)),
+        Err(e) => Err(e),
     }
 }

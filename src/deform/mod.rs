@@ -22,6 +22,7 @@
 
 mod chains;
 mod patches;
+pub mod refine;
 
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};

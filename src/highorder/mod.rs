@@ -20,6 +20,7 @@
 
 pub mod basis;
 pub mod bezier;
+pub mod curve;
 pub mod order;
 
 pub use basis::{hex_map, lagrange_1d, quad_map, Basis1d};
@@ -40,7 +41,8 @@ pub const MAX_ORDER: usize = 4;
 
 /// Where the `p + 1` nodes of an order-`p` element lie on each reference
 /// edge `[0,1]`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Spacing {
     /// `i / p`: the nodes Gmsh and VTK assume for their Lagrange elements.
     #[default]

@@ -16,11 +16,11 @@
 //! the plane are dropped and the surface of the kept cells is drawn, so
 //! the faces between kept and dropped cells show the inside.
 
-mod raster;
-mod surface;
+pub(crate) mod raster;
+pub(crate) mod surface;
 #[cfg(test)]
 mod tests;
-mod view;
+pub(crate) mod view;
 
 use tiny_skia::Pixmap;
 
@@ -34,11 +34,11 @@ use view::View;
 /// Each pixel is rasterised as `SUPERSAMPLE × SUPERSAMPLE` samples: 3 gives
 /// smooth outlines and sub-pixel edge lines at a modest memory cost
 /// (about 70 bytes per output pixel).
-const SUPERSAMPLE: u32 = 3;
+pub(crate) const SUPERSAMPLE: u32 = 3;
 
 /// Width of the silhouette line in output pixels (inside the outline), at
 /// a 900-pixel-wide image; it scales with the image like the 2D boundary.
-const OUTLINE_PX: f64 = 1.3;
+pub(crate) const OUTLINE_PX: f64 = 1.3;
 
 /// Where the camera looks from. It always looks at the centre of the
 /// framed box, with the z axis pointing up in the picture.
@@ -241,7 +241,7 @@ fn validate(mesh: &HexMesh, values: &[f64]) -> Result<(), RenderError> {
 
 /// A clip plane needs a finite point and a finite, non-zero normal, or
 /// the side test would be meaningless.
-fn validate_clip(clip: &ClipPlane) -> Result<(), RenderError> {
+pub(crate) fn validate_clip(clip: &ClipPlane) -> Result<(), RenderError> {
     let finite = clip.point.iter().chain(&clip.normal).all(|x| x.is_finite());
     if finite && view::dot(clip.normal, clip.normal) > 0.0 {
         Ok(())
@@ -272,14 +272,14 @@ fn framed_nodes(mesh: &HexMesh, kept: &[bool]) -> Vec<[f64; 3]> {
 }
 
 /// The eight corners of the box `lo..hi`.
-fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> [[f64; 3]; 8] {
+pub(crate) fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> [[f64; 3]; 8] {
     std::array::from_fn(|i| std::array::from_fn(|k| if i >> k & 1 == 0 { lo[k] } else { hi[k] }))
 }
 
 /// The world box: the given one, or the bounding box of `points`; it must
 /// be finite, not reversed, and not a single point (a flat box is fine: it
 /// can still be seen from the side).
-fn resolve_box(
+pub(crate) fn resolve_box(
     points: &[[f64; 3]],
     given: Option<([f64; 3], [f64; 3])>,
 ) -> Result<([f64; 3], [f64; 3]), RenderError> {
@@ -307,7 +307,7 @@ fn resolve_box(
 /// given box's corners, or the framed nodes, a tighter frame than their
 /// bounding box's corners). A side of zero length (a flat mesh seen
 /// edge-on) is widened so the layout still has an area to map to.
-fn screen_bounds(view: &View, points: &[[f64; 3]]) -> ([f64; 2], [f64; 2]) {
+pub(crate) fn screen_bounds(view: &View, points: &[[f64; 3]]) -> ([f64; 2], [f64; 2]) {
     let mut a = [f64::INFINITY; 2];
     let mut b = [f64::NEG_INFINITY; 2];
     // Every framing point is inside the bounding sphere, so in front of
@@ -379,7 +379,7 @@ fn draw_surface(
 /// The pixel rectangle (x, y, w, h) the surface may be drawn in: the plot
 /// area widened by half a margin, as for 2D pictures, so the silhouette is
 /// not cut while a mesh outside a user-given box stays off the colour bar.
-fn plot_region(layout: &Layout) -> [u32; 4] {
+pub(crate) fn plot_region(layout: &Layout) -> [u32; 4] {
     let pad = 0.5 * layout.margin;
     let [x, y, w, h] = layout.plot;
     let x0 = (x - pad).floor().clamp(0.0, layout.width as f64) as u32;

@@ -10,8 +10,13 @@
 //! Hexahedral meshes are drawn by [`render_hex`]: the shaded boundary
 //! surface seen by a [`Camera`], optionally cut open by a [`ClipPlane`],
 //! with the same colour bar and title.
+//!
+//! Curved high-order meshes ([`CurvedMesh`](crate::io::curved::CurvedMesh))
+//! are drawn by [`render_curved_quads`] and [`render_curved_hex`], which
+//! follow the true Lagrange edges and faces of each element.
 
 mod colour;
+mod curved;
 mod draw;
 mod encode;
 pub mod font;
@@ -24,6 +29,7 @@ mod tests;
 use tiny_skia::{Color, Pixmap};
 
 pub use colour::ColourMap;
+pub use curved::{render_curved_hex, render_curved_quads};
 pub use encode::{gif_bytes, png_bytes, write_gif, write_png};
 pub use hex::{render_hex, Camera, ClipPlane, RenderOptions3};
 
@@ -62,6 +68,14 @@ pub enum RenderError {
     NonFiniteNode {
         /// Index of the offending node.
         index: usize,
+    },
+    /// A curved mesh that cannot be drawn: an element order outside
+    /// `1..=MAX_ORDER`, or a cell or boundary element with the wrong number
+    /// of nodes.
+    #[error("curved mesh cannot be drawn: {reason}")]
+    InvalidCurvedMesh {
+        /// What is wrong with it.
+        reason: String,
     },
     /// A cell refers to a node that does not exist.
     #[error("cell {cell} refers to node {node}, but the mesh has {nodes} nodes")]

@@ -55,7 +55,7 @@ impl Canvas {
     /// the inner side of all three edges (inclusive, so triangles sharing
     /// an edge leave no gap), and is written when its interpolated depth is
     /// nearer than the stored one.
-    fn fill_triangle(&mut self, t: [[f64; 3]; 3], paint: &impl Fn(f64, f64) -> [u8; 3]) {
+    pub(crate) fn fill_triangle(&mut self, t: [[f64; 3]; 3], paint: &impl Fn(f64, f64) -> [u8; 3]) {
         let area = orient(t[0], t[1], t[2][0], t[2][1]);
         // Seen edge-on (or collapsed): nothing to fill, and dividing by the
         // area would give garbage.
@@ -169,7 +169,7 @@ fn distance_to_border(border: &[[[f64; 3]; 2]; 4], x: f64, y: f64) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-fn distance_to_segment(a: [f64; 3], b: [f64; 3], x: f64, y: f64) -> f64 {
+pub(crate) fn distance_to_segment(a: [f64; 3], b: [f64; 3], x: f64, y: f64) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
     let t = if len2 > 0.0 {
@@ -183,7 +183,7 @@ fn distance_to_segment(a: [f64; 3], b: [f64; 3], x: f64, y: f64) -> f64 {
 /// The face colour with the edge line laid over it: full line opacity
 /// within the half-width, fading out over one sample so lines at shallow
 /// angles do not look stepped.
-fn edge_blend(colour: [u8; 3], style: EdgeStyle, distance: f64) -> [u8; 3] {
+pub(crate) fn edge_blend(colour: [u8; 3], style: EdgeStyle, distance: f64) -> [u8; 3] {
     let coverage = (style.half_width + 0.5 - distance).clamp(0.0, 1.0) as f32;
     if coverage <= 0.0 {
         return colour;

@@ -105,7 +105,7 @@ impl View {
     }
 
     /// Unit vector from `p` towards the eye.
-    fn to_eye(&self, p: [f64; 3]) -> [f64; 3] {
+    pub(crate) fn to_eye(&self, p: [f64; 3]) -> [f64; 3] {
         match self.eye {
             None => self.back,
             Some(eye) => normalise(sub(add(self.centre, scale(self.back, eye)), p)),
@@ -183,7 +183,7 @@ fn norm(a: [f64; 3]) -> f64 {
 }
 
 /// `a` scaled to unit length, or zero if it has none.
-fn normalise(a: [f64; 3]) -> [f64; 3] {
+pub(crate) fn normalise(a: [f64; 3]) -> [f64; 3] {
     let n = norm(a);
     if n > 0.0 {
         scale(a, 1.0 / n)

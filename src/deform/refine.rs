@@ -1,0 +1,701 @@
+//! Algorithm 2: refine, then deform onto the true boundary.
+//!
+//! Every coarse cell is split at the nodes of an order-p Lagrange element
+//! (p^d Q1 sub-cells, nodes shared between neighbours), so each coarse
+//! cell's (p+1)^d fine nodes are the nodes of one curved element
+//! afterwards. The new boundary nodes lie on the flat coarse boundary;
+//! Algorithm 1 on the fine mesh, with a uniform f, carries them onto the
+//! true geometry while the interior follows:
+//!
+//! - old (coarse) boundary nodes are fixed: they are on the geometry;
+//! - a new node inside a coarse boundary edge (2D) or face (3D) of a moving
+//!   part slides onto `Γ_t(s) = P₀(s) + t (X(P₀(s)) − P₀(s))`, the blend of
+//!   the flat coarse facet P₀ and its image X on the target (`u·n = v·n/f`,
+//!   put back onto Γ_t after every step), or with Dirichlet data follows
+//!   its straight path to X(x₀) (the paper's choice);
+//! - in 3D a new node on a coarse edge glides along that edge's blended
+//!   curve (its two components across the curve prescribed);
+//! - a curved slip wall is a target like a moving part: the new nodes go
+//!   onto it; a flat slip wall keeps its nodes gliding in its plane;
+//! - fixed parts stay.
+
+use super::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
+use crate::lsfem::Constraint;
+use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, QuadMesh};
+use std::collections::HashMap;
+
+/// A coarse Q1 mesh that can be subdivided: its boundary facets (edges in
+/// 2D, faces in 3D) and how a fine mesh of the same kind is put together.
+pub trait Subdividable<const D: usize, const N: usize>: Q1Mesh<D, N> {
+    /// Boundary facets: `2^(D−1)` nodes each (in the facet's own cyclic
+    /// order) and the part index.
+    fn facets(&self) -> Vec<(Vec<usize>, usize)>;
+    /// Part names.
+    fn names(&self) -> &[String];
+    /// A mesh of this kind from fine nodes, cells and boundary facets.
+    fn assemble(nodes: Vec<[f64; D]>, cells: Vec<[usize; N]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self;
+}
+
+impl Subdividable<2, 4> for QuadMesh {
+    fn facets(&self) -> Vec<(Vec<usize>, usize)> {
+        self.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect()
+    }
+    fn names(&self) -> &[String] {
+        &self.part_names
+    }
+    fn assemble(nodes: Vec<[f64; 2]>, cells: Vec<[usize; 4]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self {
+        let edges = facets.into_iter().map(|(n, part)| BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
+        QuadMesh { nodes, cells, edges, part_names: names }
+    }
+}
+
+impl Subdividable<3, 8> for HexMesh {
+    fn facets(&self) -> Vec<(Vec<usize>, usize)> {
+        self.faces.iter().map(|f| (f.nodes.to_vec(), f.part)).collect()
+    }
+    fn names(&self) -> &[String] {
+        &self.part_names
+    }
+    fn assemble(nodes: Vec<[f64; 3]>, cells: Vec<[usize; 8]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self {
+        let faces = facets.into_iter().map(|(n, part)| BoundaryFace { nodes: [n[0], n[1], n[2], n[3]], part }).collect();
+        HexMesh { nodes, cells, faces, part_names: names }
+    }
+}
+
+/// Where a fine boundary node sits on the coarse boundary.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Place {
+    /// Not on the boundary.
+    Interior,
+    /// A coarse node.
+    Vertex,
+    /// Inside coarse facet `facet`, at its reference coordinates s.
+    Facet { facet: usize, s: [f64; 2] },
+    /// Inside the coarse edge `edge` (3D), at σ from its first end.
+    Edge { edge: usize, sigma: f64 },
+}
+
+/// A coarse mesh split at the nodes of order-p elements.
+#[derive(Clone, Debug)]
+pub struct Subdivision<M, const D: usize> {
+    /// The Q1 mesh of the p^d sub-cells of every coarse cell.
+    pub fine: M,
+    /// Per coarse cell, its (p+1)^D fine nodes in tensor order (first
+    /// reference axis fastest).
+    pub elements: Vec<Vec<usize>>,
+    /// Per coarse boundary facet, its (p+1)^(D−1) fine nodes in tensor
+    /// order of the facet's own frame, and its part.
+    pub facets: Vec<(Vec<usize>, usize)>,
+    /// The fine index of every coarse node.
+    pub coarse_nodes: Vec<usize>,
+    /// The order.
+    pub p: usize,
+    /// Coarse facet corners (start positions), for Γ_t.
+    facet_corners: Vec<Vec<[f64; D]>>,
+    /// Coarse boundary edges in 3D: end positions and the facets they bound.
+    edges: Vec<([[f64; D]; 2], Vec<usize>)>,
+    places: Vec<Place>,
+}
+
+/// A topological name for a fine node, the same from every coarse cell
+/// and facet that contains it.
+#[derive(Clone, Copy, Debug, Hash, PartialEq, Eq)]
+enum Key {
+    Vertex(usize),
+    /// Coarse edge (lower id, higher id), k-th of p steps from the lower.
+    Edge(usize, usize, usize),
+    /// Coarse face in canonical cyclic order, (u, v) in its frame.
+    Face([usize; 4], usize, usize),
+    Cell(usize, [usize; 3]),
+}
+
+fn edge_key(a: usize, b: usize, k: usize, p: usize) -> Key {
+    if a < b { Key::Edge(a, b, k) } else { Key::Edge(b, a, p - k) }
+}
+
+/// The key of the node at (u, v) of a face with cyclic corners q, where
+/// q0 is at (0, 0), q1 at (p, 0), q2 at (p, p), q3 at (0, p). The frame
+/// is made canonical: origin at the smallest id, first axis towards its
+/// smaller neighbour.
+fn face_key(q: [usize; 4], u: usize, v: usize, p: usize) -> Key {
+    let pos = [(0, 0), (p, 0), (p, p), (0, p)];
+    let m = (0..4).min_by_key(|&k| q[k]).expect("four corners");
+    let (n1, n3) = ((m + 1) % 4, (m + 3) % 4);
+    let (a, b) = if q[n1] < q[n3] { (n1, n3) } else { (n3, n1) };
+    let dist = |from: (usize, usize), to: (usize, usize)| if from.0 != to.0 { u.abs_diff(from.0) } else { v.abs_diff(from.1) };
+    let (o, pa, pb) = (pos[m], pos[a], pos[b]);
+    Key::Face([q[m], q[a], q[(m + 2) % 4], q[b]], dist(o, pa), dist(o, pb))
+}
+
+/// Local corner number of the reference corner with coordinates `bits`
+/// ∈ {0,1}^D (Q1 node order: counter-clockwise, bottom face first).
+fn corner_index<const D: usize>(bits: [usize; D]) -> usize {
+    const TABLE: [usize; 8] = [0, 1, 3, 2, 4, 5, 7, 6];
+    TABLE[(0..D).map(|d| bits[d] << d).sum::<usize>()]
+}
+
+/// The key of tensor node `idx` of coarse cell `c` with corners `cell`.
+fn cell_key<const D: usize, const N: usize>(c: usize, cell: &[usize; N], idx: [usize; D], p: usize) -> Key {
+    let inner: Vec<usize> = (0..D).filter(|&d| idx[d] != 0 && idx[d] != p).collect();
+    let corner = |over: &[(usize, usize)]| {
+        let mut bits: [usize; D] = idx.map(|i| usize::from(i == p));
+        for &(d, b) in over {
+            bits[d] = b;
+        }
+        cell[corner_index(bits)]
+    };
+    match inner.len() {
+        0 => Key::Vertex(corner(&[])),
+        1 => edge_key(corner(&[(inner[0], 0)]), corner(&[(inner[0], 1)]), idx[inner[0]], p),
+        2 if D == 3 => {
+            let (d1, d2) = (inner[0], inner[1]);
+            let q = [corner(&[(d1, 0), (d2, 0)]), corner(&[(d1, 1), (d2, 0)]), corner(&[(d1, 1), (d2, 1)]), corner(&[(d1, 0), (d2, 1)])];
+            face_key(q, idx[d1], idx[d2], p)
+        }
+        _ => Key::Cell(c, std::array::from_fn(|d| if d < D { idx[d] } else { 0 })),
+    }
+}
+
+/// The key of node (u, v) (v = 0 for an edge) of a boundary facet.
+fn facet_key(q: &[usize], u: usize, v: usize, p: usize) -> Key {
+    if q.len() == 2 {
+        return match u {
+            0 => Key::Vertex(q[0]),
+            u if u == p => Key::Vertex(q[1]),
+            u => edge_key(q[0], q[1], u, p),
+        };
+    }
+    let q = [q[0], q[1], q[2], q[3]];
+    let (ub, vb) = (u == 0 || u == p, v == 0 || v == p);
+    let corner = |u: usize, v: usize| match (u == p, v == p) {
+        (false, false) => q[0],
+        (true, false) => q[1],
+        (true, true) => q[2],
+        (false, true) => q[3],
+    };
+    match (ub, vb) {
+        (true, true) => Key::Vertex(corner(u, v)),
+        (false, true) => edge_key(corner(0, v), corner(p, v), u, p),
+        (true, false) => edge_key(corner(u, 0), corner(u, p), v, p),
+        (false, false) => face_key(q, u, v, p),
+    }
+}
+
+/// All tensor indices of a (p+1)^D grid, first axis fastest.
+fn tensor_indices<const D: usize>(p: usize) -> impl Iterator<Item = [usize; D]> {
+    let n = p + 1;
+    (0..n.pow(D as u32)).map(move |k| std::array::from_fn(|d| (k / n.pow(d as u32)) % n))
+}
+
+/// Splits every cell of `coarse` at the 1D reference nodes `t` (p + 1
+/// values in [0, 1] from 0 to 1, e.g. equispaced or Gauss–Lobatto).
+pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M, t: &[f64]) -> Subdivision<M, D> {
+    let p = t.len() - 1;
+    let mut ids: HashMap<Key, usize> = HashMap::new();
+    let mut nodes: Vec<[f64; D]> = Vec::new();
+    let mut elements = Vec::with_capacity(coarse.cells().len());
+    for (c, cell) in coarse.cells().iter().enumerate() {
+        let corners = cell.map(|n| coarse.nodes()[n]);
+        let element: Vec<usize> = tensor_indices::<D>(p)
+            .map(|idx| {
+                *ids.entry(cell_key::<D, N>(c, cell, idx, p)).or_insert_with(|| {
+                    let xi: [f64; D] = std::array::from_fn(|d| t[idx[d]]);
+                    let shape = crate::lsfem::q1_shape::<D, N>(xi);
+                    nodes.push(std::array::from_fn(|k| (0..N).map(|a| shape[a] * corners[a][k]).sum()));
+                    nodes.len() - 1
+                })
+            })
+            .collect();
+        elements.push(element);
+    }
+    let n1 = p + 1;
+    let sub_cells: Vec<[usize; N]> = elements
+        .iter()
+        .flat_map(|el| {
+            tensor_indices::<D>(p - 1).map(move |idx| {
+                let at = |off: [usize; D]| el[(0..D).map(|d| (idx[d] + off[d]) * n1.pow(d as u32)).sum::<usize>()];
+                std::array::from_fn(|a| at(std::array::from_fn(|d| usize::from(crate::lsfem::q1_corner(a, d) == 1.0))))
+            })
+        })
+        .collect();
+    let mut places = vec![Place::Interior; nodes.len()];
+    let mut facets = Vec::new();
+    let mut fine_facets = Vec::new();
+    let mut facet_corners = Vec::new();
+    let mut edges: Vec<([[f64; D]; 2], Vec<usize>)> = Vec::new();
+    let mut edge_ids: HashMap<(usize, usize), usize> = HashMap::new();
+    for (f, (q, part)) in coarse.facets().into_iter().enumerate() {
+        let (nu, nv) = if D == 2 { (n1, 1) } else { (n1, n1) };
+        let mut grid = Vec::with_capacity(nu * nv);
+        for v in 0..nv {
+            for u in 0..nu {
+                let key = facet_key(&q, u, v, p);
+                let id = ids[&key];
+                grid.push(id);
+                places[id] = match key {
+                    Key::Vertex(_) => Place::Vertex,
+                    Key::Edge(a, b, k) if D == 3 => {
+                        let e = *edge_ids.entry((a, b)).or_insert_with(|| {
+                            edges.push(([coarse.nodes()[a], coarse.nodes()[b]], Vec::new()));
+                            edges.len() - 1
+                        });
+                        if !edges[e].1.contains(&f) {
+                            edges[e].1.push(f);
+                        }
+                        Place::Edge { edge: e, sigma: t[k] }
+                    }
+                    _ => Place::Facet { facet: f, s: [t[u], if D == 2 { 0.0 } else { t[v] }] },
+                };
+            }
+        }
+        // fine facets keep the coarse facet's orientation
+        if D == 2 {
+            fine_facets.extend(grid.windows(2).map(|w| (vec![w[0], w[1]], part)));
+        } else {
+            for v in 0..p {
+                for u in 0..p {
+                    let at = |u: usize, v: usize| grid[v * n1 + u];
+                    fine_facets.push((vec![at(u, v), at(u + 1, v), at(u + 1, v + 1), at(u, v + 1)], part));
+                }
+            }
+        }
+        facet_corners.push(q.iter().map(|&n| coarse.nodes()[n]).collect());
+        facets.push((grid, part));
+    }
+    let coarse_nodes = (0..coarse.nodes().len()).map(|n| ids.get(&Key::Vertex(n)).copied().unwrap_or(usize::MAX)).collect();
+    let fine = M::assemble(nodes, sub_cells, fine_facets, coarse.names().to_vec());
+    Subdivision { fine, elements, facets, coarse_nodes, p, facet_corners, edges, places }
+}
+
+/// What a fine boundary node does during Algorithm 2.
+#[derive(Clone, Copy, Debug)]
+pub enum Role2 {
+    /// Not on the boundary.
+    Interior,
+    /// Stays where it is.
+    Fixed,
+    /// Follows the straight path from its start to its image (Dirichlet).
+    Path,
+    /// Glides on the blended facet or edge `carrier` at parameter s; the
+    /// image is that of `part` (none: the carrier itself, a flat wall).
+    Slide {
+        /// Index into the carriers.
+        carrier: usize,
+        /// Parameter on the carrier (one or two coordinates).
+        s: [f64; 2],
+    },
+}
+
+/// A flat coarse facet or edge that carries sliding nodes.
+#[derive(Clone, Debug)]
+struct Carrier<const D: usize> {
+    /// 2 (a segment) or 4 (a bilinear quad) corner positions.
+    corners: Vec<[f64; D]>,
+    /// The part whose image X applies, if any (else X = identity).
+    part: Option<usize>,
+    /// Parameters stay within [0, 1] (moving carriers end at fixed nodes).
+    bounded: bool,
+}
+
+impl<const D: usize> Carrier<D> {
+    fn dims(&self) -> usize {
+        if self.corners.len() == 2 { 1 } else { 2 }
+    }
+
+    fn start(&self, s: [f64; 2]) -> [f64; D] {
+        let c = &self.corners;
+        if c.len() == 2 {
+            return std::array::from_fn(|i| (1.0 - s[0]) * c[0][i] + s[0] * c[1][i]);
+        }
+        let w = [(1.0 - s[0]) * (1.0 - s[1]), s[0] * (1.0 - s[1]), s[0] * s[1], (1.0 - s[0]) * s[1]];
+        std::array::from_fn(|i| (0..4).map(|k| w[k] * c[k][i]).sum())
+    }
+}
+
+/// The Algorithm 2 boundary: every fine boundary node's role.
+pub struct RefineBoundary<const D: usize> {
+    parts: Vec<BoundaryPart<D>>,
+    carriers: Vec<Carrier<D>>,
+    roles: Vec<Role2>,
+    start: Vec<[f64; D]>,
+    /// Image of each Path node, and the part whose target it is on.
+    targets: Vec<Option<([f64; D], usize)>>,
+}
+
+/// A fine mesh ready for Algorithm 2: the mesh and where its nodes sit.
+#[derive(Clone, Debug)]
+pub struct RefineMesh<M, const D: usize> {
+    /// The fine Q1 mesh.
+    pub mesh: M,
+    facet_corners: Vec<Vec<[f64; D]>>,
+    facet_parts: Vec<usize>,
+    edges: Vec<([[f64; D]; 2], Vec<usize>)>,
+    places: Vec<Place>,
+}
+
+impl<M: Clone, const D: usize> Subdivision<M, D> {
+    /// The fine mesh with what Algorithm 2 needs to know about its nodes.
+    pub fn refine_mesh(&self) -> RefineMesh<M, D> {
+        RefineMesh {
+            mesh: self.fine.clone(),
+            facet_corners: self.facet_corners.clone(),
+            facet_parts: self.facets.iter().map(|f| f.1).collect(),
+            edges: self.edges.clone(),
+            places: self.places.clone(),
+        }
+    }
+}
+
+/// The parts of Algorithm 2 from those of Algorithm 1: a curved slip wall
+/// becomes a target the new nodes slide onto (closest point).
+pub fn refine_parts<const D: usize>(parts: &[BoundaryPart<D>]) -> Vec<BoundaryPart<D>> {
+    parts
+        .iter()
+        .map(|p| match &p.kind {
+            PartKind::Slip { wall: Some(w) } => BoundaryPart {
+                name: p.name.clone(),
+                kind: PartKind::Move { target: w.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+            },
+            _ => p.clone(),
+        })
+        .collect()
+}
+
+/// Orthonormal completion of the unit vector `n`: a frame with n first.
+fn frame_with<const D: usize>(n: [f64; D]) -> [[f64; D]; D] {
+    let mut frame = [[0.0; D]; D];
+    frame[0] = n;
+    let mut k = 1;
+    for axis in 0..D {
+        if k == D {
+            break;
+        }
+        let mut v: [f64; D] = std::array::from_fn(|i| if i == axis { 1.0 } else { 0.0 });
+        for f in &frame[..k] {
+            let d: f64 = (0..D).map(|i| v[i] * f[i]).sum();
+            v = std::array::from_fn(|i| v[i] - d * f[i]);
+        }
+        let l = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if l > 0.3 {
+            frame[k] = v.map(|c| c / l);
+            k += 1;
+        }
+    }
+    frame
+}
+
+fn unit<const D: usize>(v: [f64; D]) -> [f64; D] {
+    let l = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+    v.map(|c| c / l)
+}
+
+fn dot<const D: usize>(a: [f64; D], b: [f64; D]) -> f64 {
+    (0..D).map(|i| a[i] * b[i]).sum()
+}
+
+impl<const D: usize> RefineBoundary<D> {
+    fn image(&self, part: Option<usize>, p: [f64; D]) -> [f64; D] {
+        part.and_then(|k| self.parts[k].image(p)).unwrap_or(p)
+    }
+
+    /// Γ_t(s) of a carrier and its velocity X(P₀(s)) − P₀(s).
+    fn carrier_point(&self, c: usize, s: [f64; 2], t: f64) -> ([f64; D], [f64; D]) {
+        let car = &self.carriers[c];
+        let p0 = car.start(s);
+        let x = self.image(car.part, p0);
+        let v = std::array::from_fn(|i| x[i] - p0[i]);
+        (std::array::from_fn(|i| p0[i] + t * v[i]), v)
+    }
+
+    /// Tangents of Γ_t at s (one or two), by central differences.
+    fn tangents(&self, c: usize, s: [f64; 2], t: f64) -> Vec<[f64; D]> {
+        let h = 1e-6;
+        (0..self.carriers[c].dims())
+            .map(|k| {
+                let (mut a, mut b) = (s, s);
+                a[k] -= h;
+                b[k] += h;
+                let (pa, pb) = (self.carrier_point(c, a, t).0, self.carrier_point(c, b, t).0);
+                std::array::from_fn(|i| (pb[i] - pa[i]) / (2.0 * h))
+            })
+            .collect()
+    }
+
+    fn constraint(&self, i: usize, t: f64, f: f64) -> Constraint<D> {
+        match self.roles[i] {
+            Role2::Interior => Constraint::free(),
+            Role2::Fixed => Constraint::fixed([0.0; D]),
+            Role2::Path => {
+                let to = self.targets[i].expect("a path node has a target").0;
+                Constraint::fixed(std::array::from_fn(|k| (to[k] - self.start[i][k]) / f))
+            }
+            Role2::Slide { carrier, s } => {
+                let v = self.carrier_point(carrier, s, t).1.map(|c| c / f);
+                let tan = self.tangents(carrier, s, t);
+                if tan.len() == D - 1 {
+                    // a facet: u·n = v·n (the sign of n does not matter)
+                    let n = unit(if D == 2 {
+                        std::array::from_fn(|k| if k == 0 { tan[0][1] } else { -tan[0][0] })
+                    } else {
+                        let c = crate::numeric::cross3(std::array::from_fn(|k| tan[0][k]), std::array::from_fn(|k| tan[1][k]));
+                        std::array::from_fn(|k| c[k])
+                    });
+                    Constraint { frame: frame_with(n), fixed: 1, values: std::array::from_fn(|k| if k == 0 { dot(v, n) } else { 0.0 }) }
+                } else {
+                    // an edge in 3D: the components across the curve follow it
+                    let tau = unit(tan[0]);
+                    let mut frame = frame_with(tau);
+                    frame.rotate_left(1);
+                    Constraint { frame, fixed: D - 1, values: std::array::from_fn(|k| if k + 1 < D { dot(v, frame[k]) } else { 0.0 }) }
+                }
+            }
+        }
+    }
+
+    /// The point of Γ_t closest to x by Gauss–Newton on s from `s0`.
+    fn project(&self, c: usize, s0: [f64; 2], x: [f64; D], t: f64) -> [f64; 2] {
+        let car = &self.carriers[c];
+        let dims = car.dims();
+        let mut s = s0;
+        for _ in 0..20 {
+            let p = self.carrier_point(c, s, t).0;
+            let tan = self.tangents(c, s, t);
+            let r: [f64; D] = std::array::from_fn(|i| x[i] - p[i]);
+            // normal equations (T^T T) ds = T^T r, one or two unknowns
+            let g: Vec<f64> = tan.iter().map(|a| dot(*a, r)).collect();
+            let m: Vec<Vec<f64>> = tan.iter().map(|a| tan.iter().map(|b| dot(*a, *b)).collect()).collect();
+            let ds = if dims == 1 {
+                if !(m[0][0] > 0.0) {
+                    break;
+                }
+                [g[0] / m[0][0], 0.0]
+            } else {
+                let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+                if !(det.abs() > 0.0) {
+                    break;
+                }
+                [(m[1][1] * g[0] - m[0][1] * g[1]) / det, (m[0][0] * g[1] - m[1][0] * g[0]) / det]
+            };
+            let mut next = [s[0] + ds[0], s[1] + ds[1]];
+            if car.bounded {
+                next = next.map(|v| v.clamp(0.0, 1.0));
+            }
+            let moved = (next[0] - s[0]).abs() + (next[1] - s[1]).abs();
+            s = next;
+            if moved < 1e-15 {
+                break;
+            }
+        }
+        s
+    }
+}
+
+impl<const D: usize> BoundaryModel<D> for RefineBoundary<D> {
+    type State = Vec<Role2>;
+
+    fn parts(&self) -> &[BoundaryPart<D>] {
+        &self.parts
+    }
+
+    fn velocities(&self, out: &mut [[f64; D]]) {
+        for (i, role) in self.roles.iter().enumerate() {
+            out[i] = match *role {
+                Role2::Path => {
+                    let to = self.targets[i].expect("target").0;
+                    std::array::from_fn(|k| to[k] - self.start[i][k])
+                }
+                Role2::Slide { carrier, s } => self.carrier_point(carrier, s, 0.0).1,
+                _ => [0.0; D],
+            };
+        }
+    }
+
+    fn fill_constraints(&self, t: f64, _nodes: &[[f64; D]], f: impl Fn(usize) -> f64, out: &mut [Constraint<D>]) {
+        for (i, c) in out.iter_mut().enumerate() {
+            *c = self.constraint(i, t, f(i));
+        }
+    }
+
+    fn put_back(&mut self, nodes: &mut [[f64; D]], t: f64) {
+        for i in 0..self.roles.len() {
+            match self.roles[i] {
+                Role2::Interior => {}
+                Role2::Fixed => nodes[i] = self.start[i],
+                Role2::Path => {
+                    let to = self.targets[i].expect("target").0;
+                    nodes[i] = std::array::from_fn(|k| self.start[i][k] + t * (to[k] - self.start[i][k]));
+                }
+                Role2::Slide { carrier, s } => {
+                    let s = self.project(carrier, s, nodes[i], t);
+                    nodes[i] = self.carrier_point(carrier, s, t).0;
+                    self.roles[i] = Role2::Slide { carrier, s };
+                }
+            }
+        }
+        // at t = 1 a node of a target lies on it exactly (the blend's end
+        // is X(P₀(s)), on the target up to the shape's own projection)
+    }
+
+    fn distances(&self, nodes: &[[f64; D]]) -> Vec<(usize, f64)> {
+        let mut out = Vec::new();
+        for (i, role) in self.roles.iter().enumerate() {
+            let part = match *role {
+                Role2::Path => self.targets[i].map(|x| x.1),
+                Role2::Slide { carrier, .. } => self.carriers[carrier].part,
+                _ => None,
+            };
+            if let Some(PartKind::Move { target, .. }) = part.map(|k| &self.parts[k].kind) {
+                out.push((i, target.distance(nodes[i])));
+            }
+        }
+        out
+    }
+
+    fn state(&self) -> &Vec<Role2> {
+        &self.roles
+    }
+
+    fn state_mut(&mut self) -> &mut Vec<Role2> {
+        &mut self.roles
+    }
+}
+
+impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMesh<M, D> {
+    type Boundary = RefineBoundary<D>;
+
+    fn cells(&self) -> &[[usize; N]] {
+        self.mesh.cells()
+    }
+    fn nodes(&self) -> &[[f64; D]] {
+        self.mesh.nodes()
+    }
+    fn nodes_mut(&mut self) -> &mut Vec<[f64; D]> {
+        self.mesh.nodes_mut()
+    }
+    fn flux_points<'a>(&'a self, nodes: &'a [[f64; D]], v: &'a [[f64; D]]) -> impl Iterator<Item = ([f64; D], f64)> + 'a {
+        self.mesh.flux_points(nodes, v)
+    }
+    fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize> {
+        self.mesh.invalid_cells(nodes)
+    }
+    fn measure(&self) -> f64 {
+        self.mesh.measure()
+    }
+
+    fn boundary(&self, parts: Vec<BoundaryPart<D>>) -> Result<RefineBoundary<D>, DeformError> {
+        let moving = |k: usize| matches!(parts[k].kind, PartKind::Move { .. });
+        let dirichlet = |k: usize| matches!(parts[k].kind, PartKind::Move { mode: MoveMode::Dirichlet, .. });
+        let fixed = |k: usize| matches!(parts[k].kind, PartKind::Fixed);
+        let mut carriers: Vec<Carrier<D>> = Vec::new();
+        // one carrier per coarse facet, then one per coarse edge (3D)
+        for (corners, &part) in self.facet_corners.iter().zip(&self.facet_parts) {
+            carriers.push(Carrier { corners: corners.clone(), part: moving(part).then_some(part), bounded: moving(part) });
+        }
+        let edge_base = carriers.len();
+        for (ends, facets) in &self.edges {
+            let parts_here: Vec<usize> = facets.iter().map(|&f| self.facet_parts[f]).collect();
+            let carrier_part = parts_here.iter().copied().find(|&k| moving(k));
+            carriers.push(Carrier { corners: ends.to_vec(), part: carrier_part, bounded: carrier_part.is_some() });
+        }
+        let start = self.mesh.nodes().to_vec();
+        let mut roles = vec![Role2::Interior; start.len()];
+        let mut targets = vec![None; start.len()];
+        for (i, place) in self.places.iter().enumerate() {
+            let (carrier, s, parts_here) = match *place {
+                Place::Interior => continue,
+                Place::Vertex => {
+                    roles[i] = Role2::Fixed;
+                    continue;
+                }
+                Place::Facet { facet, s } => (facet, s, vec![self.facet_parts[facet]]),
+                Place::Edge { edge, sigma } => (edge_base + edge, [sigma, 0.0], self.edges[edge].1.iter().map(|&f| self.facet_parts[f]).collect()),
+            };
+            roles[i] = if parts_here.iter().any(|&k| fixed(k)) {
+                Role2::Fixed
+            } else if let Some(k) = parts_here.iter().copied().find(|&k| dirichlet(k)) {
+                let image = parts[k].image(start[i]).ok_or_else(|| DeformError::Unreachable {
+                    part: parts[k].name.clone(),
+                    why: format!("a new high-order node at {:?} has no image on the target", start[i]),
+                })?;
+                targets[i] = Some((image, k));
+                Role2::Path
+            } else {
+                Role2::Slide { carrier, s }
+            };
+        }
+        let b = RefineBoundary { parts, carriers, roles, start, targets };
+        // every sliding node of a moving carrier needs an image
+        for (i, role) in b.roles.iter().enumerate() {
+            if let Role2::Slide { carrier, s } = *role {
+                let car = &b.carriers[carrier];
+                if let Some(k) = car.part {
+                    if b.parts[k].image(car.start(s)).is_none() {
+                        return Err(DeformError::Unreachable {
+                            part: b.parts[k].name.clone(),
+                            why: format!("the new high-order node {i} at {:?} has no image on the target", b.start[i]),
+                        });
+                    }
+                }
+            }
+        }
+        Ok(b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn equispaced(p: usize) -> Vec<f64> {
+        (0..=p).map(|k| k as f64 / p as f64).collect()
+    }
+
+    #[test]
+    fn quad_subdivision_shares_nodes_and_counts_match() {
+        let coarse = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 2);
+        for p in 1..=4 {
+            let s = subdivide(&coarse, &equispaced(p));
+            // a structured (3p+1)×(2p+1) grid
+            assert_eq!(s.fine.nodes.len(), (3 * p + 1) * (2 * p + 1), "p = {p}");
+            assert_eq!(s.fine.cells.len(), 6 * p * p);
+            assert_eq!(s.fine.edges.len(), 10 * p);
+            assert!(crate::quality::invalid_cells(&s.fine, &s.fine.nodes).is_empty());
+            assert!((s.fine.area() - 1.0).abs() < 1e-14);
+            // each element's nodes sit at its tensor positions
+            for (c, el) in s.elements.iter().enumerate() {
+                let lo = coarse.nodes[coarse.cells[c][0]];
+                for (k, &n) in el.iter().enumerate() {
+                    let (i, j) = (k % (p + 1), k / (p + 1));
+                    let want = [lo[0] + i as f64 / (3 * p) as f64, lo[1] + j as f64 / (2 * p) as f64];
+                    let got = s.fine.nodes[n];
+                    assert!((got[0] - want[0]).abs() < 1e-14 && (got[1] - want[1]).abs() < 1e-14);
+                }
+            }
+            assert!(s.coarse_nodes.iter().all(|&n| n != usize::MAX));
+        }
+    }
+
+    #[test]
+    fn hex_subdivision_shares_faces_in_any_orientation() {
+        let mut coarse = HexMesh::structured_box([0.0; 3], [1.0; 3], [2, 2, 2]);
+        // renumber nodes in reverse so shared faces meet in other frames
+        let n = coarse.nodes.len();
+        coarse.nodes.reverse();
+        coarse.cells.iter_mut().for_each(|c| *c = c.map(|v| n - 1 - v));
+        coarse.faces.iter_mut().for_each(|f| f.nodes = f.nodes.map(|v| n - 1 - v));
+        for p in 1..=3 {
+            let s = subdivide(&coarse, &equispaced(p));
+            assert_eq!(s.fine.nodes.len(), (2 * p + 1).pow(3), "p = {p}");
+            assert_eq!(s.fine.faces.len(), 6 * 4 * p * p);
+            assert!(crate::hexquality::invalid_hex_cells(&s.fine, &s.fine.nodes).is_empty());
+            // every boundary facet's nodes lie on the box's surface
+            for (grid, _) in &s.facets {
+                assert_eq!(grid.len(), (p + 1) * (p + 1));
+                for &g in grid {
+                    let x = s.fine.nodes[g];
+                    assert!(x.iter().any(|&c| c.abs() < 1e-14 || (c - 1.0).abs() < 1e-14), "{x:?}");
+                }
+            }
+        }
+    }
+}

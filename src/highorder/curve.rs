@@ -1,0 +1,201 @@
+//! Algorithms 2 and 3 together: a coarse Q1 mesh and its boundary parts
+//! in, a certified curved mesh of order-p Lagrange elements out.
+//!
+//! The coarse mesh is subdivided at the element nodes, Algorithm 2
+//! ([`crate::deform::refine`]) carries the new boundary nodes onto the
+//! true geometry, and each coarse cell's (p+1)^d fine nodes become one
+//! element (Algorithm 3). Every element is then certified by the Bézier
+//! bounds of its det J, and the curved boundary is sampled against the
+//! exact shapes.
+
+use super::{certify_hex, certify_quad, check_order, nodes_1d, Basis1d, Certificate, HighOrderError, Spacing};
+use crate::deform::refine::{refine_parts, subdivide, RefineMesh, Subdividable};
+use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
+use crate::io::curved::{CurvedBoundary, CurvedMesh};
+use crate::jacobian::JacobianField;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Options of Algorithms 2 and 3.
+#[derive(Clone, Debug)]
+pub struct CurveOptions {
+    /// Element order p, 1 ..= 4.
+    pub order: usize,
+    /// Where the element nodes sit.
+    pub spacing: Spacing,
+    /// Pseudo-time steps of Algorithm 2 (the motion is local: fewer than
+    /// Algorithm 1 needs; the paper doubles the step).
+    pub steps: usize,
+    /// Options of the flow (integrator, solver); `steps` above wins.
+    pub flow: DeformOptions,
+    /// Boundary samples per element edge direction for the geometric
+    /// error (on top of the nodes).
+    pub samples: usize,
+}
+
+impl Default for CurveOptions {
+    fn default() -> Self {
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: 10, flow: DeformOptions::default(), samples: 16 }
+    }
+}
+
+/// Errors of curving a mesh.
+#[derive(Debug, thiserror::Error)]
+pub enum CurveError {
+    /// The order or node layout is not supported.
+    #[error(transparent)]
+    Order(#[from] HighOrderError),
+    /// The coarse mesh is invalid: no high-order mesh is made from it.
+    #[error("the mesh to be curved already has {} invalid cell(s): {:?}", .0.len(), &.0[..(.0.len().min(20))])]
+    InvalidCoarse(Vec<usize>),
+    /// Algorithm 2 failed (a tangle, an unreachable target, ...).
+    #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {0}")]
+    Deform(#[from] DeformError),
+}
+
+/// The figures of a curved mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct CurvedQuality {
+    /// Element order.
+    pub order: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Nodes.
+    pub nodes: usize,
+    /// Certified lower bound of det J over all elements (reference
+    /// [0,1]^d; Gmsh's [−1,1]^d gives 2^−d of it).
+    pub min_det_j: f64,
+    /// A value of det J actually attained, at most this much above the bound.
+    pub min_det_j_attained: f64,
+    /// Upper bound of det J.
+    pub max_det_j: f64,
+    /// Smallest and largest per-element minimum scaled Jacobian (sampled on
+    /// a (3p+1)^d grid).
+    pub scaled_jacobian: crate::quality::Range,
+    /// Elements whose det J is not certified positive.
+    pub invalid_elements: Vec<usize>,
+    /// Largest distance of a boundary node of a curved part to its shape.
+    pub boundary_node_distance: f64,
+    /// Largest distance of a densely sampled point of the curved boundary
+    /// to its shape.
+    pub boundary_sample_distance: f64,
+}
+
+/// A curved mesh with its certificates and figures.
+pub struct Curved<const D: usize> {
+    /// The mesh of order-p Lagrange elements.
+    pub mesh: CurvedMesh<D>,
+    /// Per element, its det J certificate.
+    pub certificates: Vec<Certificate>,
+    /// Summary figures.
+    pub quality: CurvedQuality,
+    /// Counters and timings of Algorithm 2.
+    pub stats: RunStats,
+    /// Seconds spent in Algorithm 2, in certification.
+    pub seconds: (f64, f64),
+}
+
+/// One element's certificate (D = 2 or 3).
+pub fn certify_element<const D: usize>(p: usize, spacing: Spacing, ctrl: &[[f64; D]]) -> Result<Certificate, HighOrderError> {
+    if D == 2 {
+        let c: Vec<[f64; 2]> = ctrl.iter().map(|x| [x[0], x[1]]).collect();
+        certify_quad(p, spacing, &c)
+    } else {
+        let c: Vec<[f64; 3]> = ctrl.iter().map(|x| [x[0], x[1], x[2]]).collect();
+        certify_hex(p, spacing, &c)
+    }
+}
+
+/// Certifies every element; returns the certificates and the summary
+/// without the boundary figures.
+pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
+    let certs: Vec<Certificate> =
+        (0..mesh.cells.len()).into_par_iter().map(|c| certify_element(mesh.p, mesh.spacing, &mesh.cell_coords(c))).collect::<Result<_, _>>()?;
+    let invalid = certs.iter().enumerate().filter(|(_, c)| !c.valid).map(|(i, _)| i).collect();
+    let q = CurvedQuality {
+        order: mesh.p,
+        elements: mesh.cells.len(),
+        nodes: mesh.nodes.len(),
+        min_det_j: certs.iter().map(|c| c.min_det_lower).fold(f64::INFINITY, f64::min),
+        min_det_j_attained: certs.iter().map(|c| c.min_det_upper).fold(f64::INFINITY, f64::min),
+        max_det_j: certs.iter().map(|c| c.max_det).fold(f64::NEG_INFINITY, f64::max),
+        scaled_jacobian: crate::quality::Range::of(certs.iter().map(|c| c.min_scaled_jacobian)),
+        invalid_elements: invalid,
+        boundary_node_distance: 0.0,
+        boundary_sample_distance: 0.0,
+    };
+    Ok((certs, q))
+}
+
+/// Runs Algorithms 2 and 3 on a valid coarse mesh whose boundary facets
+/// carry indices into `parts` (the parts of Algorithm 1).
+pub fn curve<M, const D: usize, const N: usize>(coarse: &M, parts: &[BoundaryPart<D>], opts: &CurveOptions) -> Result<Curved<D>, CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    check_order(opts.order)?;
+    let bad = coarse.invalid_cells(coarse.nodes());
+    if !bad.is_empty() {
+        return Err(CurveError::InvalidCoarse(bad));
+    }
+    let p = opts.order;
+    let clock = Instant::now();
+    let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?);
+    let flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
+    let parts2 = refine_parts(parts);
+    let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
+    def.run(&[], |_| {}, |_| {})?;
+    let node_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+    let alg2 = clock.elapsed().as_secs_f64();
+    let mesh = CurvedMesh {
+        p,
+        spacing: opts.spacing,
+        nodes: def.mesh.mesh.nodes().to_vec(),
+        cells: sub.elements.clone(),
+        boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
+        part_names: coarse.names().to_vec(),
+    };
+    let clock = Instant::now();
+    let (certificates, mut quality) = certify_mesh(&mesh)?;
+    quality.boundary_node_distance = node_distance;
+    quality.boundary_sample_distance = sampled_distance(&mesh, &parts2, opts.samples)?;
+    Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), seconds: (alg2, clock.elapsed().as_secs_f64()) })
+}
+
+/// The largest distance from the curved boundary of moving (and curved
+/// slip) parts, sampled on a grid of `samples` points per direction of
+/// each boundary element, to the part's shape.
+pub fn sampled_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<f64, HighOrderError> {
+    let basis = Basis1d::new(mesh.p, mesh.spacing)?;
+    let m = samples.max(2);
+    let at: Vec<Vec<f64>> = (0..=m).map(|k| basis.eval(k as f64 / m as f64).0).collect();
+    let worst = mesh
+        .boundary
+        .par_iter()
+        .filter_map(|b| match &parts.get(b.part)?.kind {
+            PartKind::Move { target, .. } => Some((b, target.clone())),
+            _ => None,
+        })
+        .map(|(b, target)| {
+            let n1 = mesh.p + 1;
+            let mut worst = 0.0f64;
+            let vs: Vec<usize> = if D == 2 { vec![0] } else { (0..=m).collect() };
+            for &kv in &vs {
+                for ku in 0..=m {
+                    let mut x = [0.0; D];
+                    for (idx, &node) in b.nodes.iter().enumerate() {
+                        let w = if D == 2 { at[ku][idx] } else { at[ku][idx % n1] * at[kv][idx / n1] };
+                        for d in 0..D {
+                            x[d] += w * mesh.nodes[node][d];
+                        }
+                    }
+                    worst = worst.max(target.distance(x));
+                }
+            }
+            worst
+        })
+        .reduce(|| 0.0, f64::max);
+    Ok(worst)
+}
