@@ -239,6 +239,26 @@ fn format_curved(q: &CurvedQuality) -> String {
     )
 }
 
+/// The dimension and cell element type of an MSH 4.1 ASCII file, by a
+/// light scan of its element block headers (None if it does not scan:
+/// the reader then gives the precise error).
+fn cell_type_of(text: &str) -> Option<(usize, i64)> {
+    let mut lines = text.lines().skip_while(|l| l.trim() != "$Elements").skip(1);
+    let blocks: usize = lines.next()?.split_whitespace().next()?.parse().ok()?;
+    let mut best: Option<(usize, i64)> = None;
+    for _ in 0..blocks {
+        let h: Vec<i64> = lines.next()?.split_whitespace().map(|t| t.parse().ok()).collect::<Option<_>>()?;
+        let (dim, ty, count) = (*h.first()? as usize, *h.get(2)?, *h.get(3)? as usize);
+        if best.is_none_or(|b| dim > b.0) {
+            best = Some((dim, ty));
+        }
+        for _ in 0..count {
+            lines.next()?;
+        }
+    }
+    best
+}
+
 /// Quality figures of a linear or high-order quad or hex MSH file.
 fn quality_of(path: &Path) -> Result<Figures> {
     use deformesh::io::curved::CurvedMesh;
@@ -249,15 +269,11 @@ fn quality_of(path: &Path) -> Result<Figures> {
     let curved = |q: Result<(Vec<deformesh::highorder::Certificate>, CurvedQuality), deformesh::highorder::HighOrderError>| -> Result<Figures> {
         Ok(Figures::Curved(q.map_err(anyhow::Error::from)?.1))
     };
-    match linear_quality_of(path) {
-        Err(MshError::UnknownElementType { element_type: 10 | 36 | 37, .. }) => {
-            curved(certify_mesh(&CurvedMesh::<2>::read_msh(path).map_err(named)?))
-        }
-        Err(MshError::UnknownElementType { element_type: 12 | 92 | 93, .. }) => {
-            curved(certify_mesh(&CurvedMesh::<3>::read_msh(path).map_err(named)?))
-        }
-        Ok(q) => Ok(Figures::Linear(q)),
-        Err(e) => Err(named(e)),
+    let text = std::fs::read(path).map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
+    match cell_type_of(&text) {
+        Some((2, 10 | 36 | 37)) => curved(certify_mesh(&CurvedMesh::<2>::read_msh(path).map_err(named)?)),
+        Some((3, 12 | 92 | 93)) => curved(certify_mesh(&CurvedMesh::<3>::read_msh(path).map_err(named)?)),
+        _ => Ok(Figures::Linear(linear_quality_of(path).map_err(named)?)),
     }
 }
 

@@ -230,3 +230,44 @@ fn a_3d_case_curves_through_setup() {
     let AnySetup::Hex(s) = case.setup_any("q", Path::new(".")).unwrap() else { panic!("3D") };
     assert_eq!(s.highorder.as_ref().unwrap().order, 3);
 }
+
+/// `deformesh quality --json FILE`: exit code and the JSON figures.
+fn quality_cli(file: &Path) -> (i32, serde_json::Value) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_deformesh")).args(["quality", "--json"]).arg(file).output().unwrap();
+    let json = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
+    (out.status.code().unwrap(), json)
+}
+
+#[test]
+fn quality_reads_gmsh_high_order_files_and_finds_the_invalid_elements_gmsh_finds() {
+    let dir = tempfile::tempdir().unwrap();
+    for p in [2, 3] {
+        let file = dir.path().join(format!("disk{p}.msh"));
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/make_gmsh_highorder.py");
+        let out = std::process::Command::new(common::python()).arg(script).arg(&file).arg(p.to_string()).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let g: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let gmin = common::floats(&g["minDetJac"]);
+        let (code, q) = quality_cli(&file);
+        assert_eq!(q["order"], p);
+        assert_eq!(q["elements"].as_u64(), g["elements"].as_u64());
+        let ours: Vec<usize> = q["invalid_elements"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap() as usize).collect();
+        let theirs: Vec<usize> = gmin.iter().enumerate().filter(|(_, v)| **v <= 0.0).map(|(i, _)| i).collect();
+        assert_eq!(ours, theirs, "p = {p}: invalid elements, ours against Gmsh's own");
+        assert_eq!(code, if ours.is_empty() { 0 } else { 2 });
+        // Gmsh's own snapping of a p = 3 disk leaves invalid elements
+        eprintln!("Gmsh's own order-{p} disk: {} of {} elements invalid", ours.len(), gmin.len());
+    }
+}
+
+#[test]
+fn quality_reads_our_curved_files() {
+    let dir = tempfile::tempdir().unwrap();
+    run_case("quarter_disk_p3.toml", dir.path(), |c| c.mesh.cells = vec![4, 4]).unwrap();
+    let (code, q) = quality_cli(&dir.path().join("mesh.msh"));
+    assert_eq!(code, 0);
+    assert_eq!((q["order"].as_u64(), q["elements"].as_u64()), (Some(3), Some(16)));
+    assert!(q["min_det_j"].as_f64().unwrap() > 0.0);
+    let (_, lin) = quality_cli(&dir.path().join("linear.msh"));
+    assert_eq!(lin["cells"].as_u64(), Some(16));
+}
