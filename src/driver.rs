@@ -56,6 +56,14 @@ pub enum RunError {
     /// A writer failed.
     #[error(transparent)]
     Vtu(#[from] VtuError),
+    /// An input file could not be read.
+    #[error("cannot read `{}`: {source}", path.display())]
+    Read {
+        /// The path.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
     /// The output folder could not be written.
     #[error("cannot write `{}`", path.display())]
     Write {
@@ -498,4 +506,118 @@ fn write_all(out_dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), RunError
         std::fs::rename(tmp, path).map_err(fail(path.clone()))?;
     }
     Ok(())
+}
+
+/// What `deformesh curve` is asked to do.
+#[derive(Clone, Debug)]
+pub struct CurveJob {
+    /// The linear quad or hex mesh (MSH 4.1).
+    pub input: PathBuf,
+    /// The geometry file binding its groups to shapes.
+    pub geometry: PathBuf,
+    /// The curved mesh to write (`.msh`); the VTU, PNG and report go
+    /// beside it under the same stem.
+    pub output: PathBuf,
+    /// Algorithms 2 and 3.
+    pub options: CurveOptions,
+    /// Picture width in pixels.
+    pub width: u32,
+}
+
+/// `<stem>.report.json` of `deformesh curve`.
+#[derive(Clone, Debug, Serialize)]
+pub struct CurveReport {
+    /// The input mesh.
+    pub input: String,
+    /// 2 or 3.
+    pub dimension: usize,
+    /// Linear input cells (= curved elements).
+    pub cells: usize,
+    /// Groups the geometry file does not name: their nodes stayed.
+    pub unbound_groups: Vec<String>,
+    /// Validity and geometry of the result.
+    pub quality: CurvedQuality,
+    /// Node spacing.
+    pub spacing: Spacing,
+    /// Accepted and halved steps of Algorithm 2.
+    pub steps: usize,
+    /// Halved steps.
+    pub halved_steps: usize,
+    /// Seconds of Algorithm 2 and of the certification.
+    pub algorithm2_s: f64,
+    /// Seconds of the certification.
+    pub certify_s: f64,
+    /// Whole job.
+    pub total_s: f64,
+    /// Files written.
+    pub outputs: Vec<String>,
+}
+
+/// `deformesh curve`: reads a linear mesh and a geometry file, runs
+/// Algorithms 2 and 3, and writes the curved mesh (MSH, VTU, PNG, report)
+/// only if every element is certified valid.
+pub fn curve_file(job: &CurveJob) -> Result<CurveReport, RunError> {
+    let text = std::fs::read(&job.input).map_err(|source| RunError::Read { path: job.input.clone(), source })?;
+    let text = String::from_utf8_lossy(&text);
+    let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
+    let gfile = job.geometry.display().to_string();
+    match crate::io::msh::cell_type_of(&text) {
+        Some((3, _)) => {
+            let mesh = crate::io::msh::parse_hex_msh(&text)?;
+            let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
+            curve_mesh(&mesh, &parts, unbound, job)
+        }
+        _ => {
+            let mesh = crate::io::msh::parse_msh(&text)?;
+            let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
+            curve_mesh(&mesh, &parts, unbound, job)
+        }
+    }
+}
+
+fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(mesh: &M, parts: &[BoundaryPart<D>], unbound: Vec<String>, job: &CurveJob) -> Result<CurveReport, RunError> {
+    let clock = Instant::now();
+    let c = mesh.curve(parts, &job.options)?;
+    if !c.quality.invalid_elements.is_empty() {
+        return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
+    }
+    let stem = job.output.file_stem().map_or("curved".into(), |s| s.to_string_lossy().into_owned());
+    let dir = job.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
+    let min_det: Vec<f64> = c.certificates.iter().map(|x| x.min_det_lower).collect();
+    let sj: Vec<f64> = c.certificates.iter().map(|x| x.min_scaled_jacobian).collect();
+    let mut files: Vec<(String, Vec<u8>)> = vec![
+        (format!("{stem}.msh"), c.mesh.msh_string()?.into_bytes()),
+        (format!("{stem}.vtu"), c.mesh.vtu_string(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])?.into_bytes()),
+    ];
+    let output = OutputSpec::default();
+    let bounds = frame_bounds(std::iter::once(c.mesh.nodes.as_slice()));
+    let r = Range::of(sj.iter().copied());
+    let look = Look {
+        bounds,
+        range: (r.min.min(r.max - 1e-3), r.max),
+        title: format!("{}: order {} elements", stem, c.mesh.p),
+        width: job.width,
+        label: "min scaled Jacobian",
+        colour_map: Some(ColourMap::Sequential),
+        output: &output,
+    };
+    files.push((format!("{stem}.png"), png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?));
+    let mut report = CurveReport {
+        input: job.input.display().to_string(),
+        dimension: D,
+        cells: c.mesh.cells.len(),
+        unbound_groups: unbound,
+        quality: c.quality.clone(),
+        spacing: c.mesh.spacing,
+        steps: c.stats.steps,
+        halved_steps: c.stats.halved,
+        algorithm2_s: c.seconds.0,
+        certify_s: c.seconds.1,
+        total_s: 0.0,
+        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(format!("{stem}.report.json"))).collect(),
+    };
+    report.total_s = clock.elapsed().as_secs_f64();
+    files.push((format!("{stem}.report.json"), serde_json::to_string_pretty(&report).expect("report serialises").into_bytes()));
+    write_all(&dir, &files)?;
+    Ok(report)
 }

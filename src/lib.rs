@@ -25,6 +25,7 @@
 //! ```
 
 pub mod bench;
+pub mod bind;
 pub mod case;
 pub mod deform;
 pub mod driver;

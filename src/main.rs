@@ -36,7 +36,33 @@ enum Command {
         #[arg(short, long, default_value = "out/demo")]
         out: PathBuf,
     },
-    /// Print quality figures of a quad mesh in Gmsh MSH 4.1 format.
+    /// Curve a user's linear mesh: bind its boundary groups to exact shapes
+    /// (a geometry file), run Algorithms 2 and 3, write OUT.msh (with
+    /// OUT.vtu, OUT.png, OUT.report.json beside it) if every element is
+    /// certified valid.
+    Curve {
+        /// The linear quad or hex mesh (Gmsh MSH 4.1, ASCII).
+        mesh: PathBuf,
+        /// The geometry file (TOML `[[group]]` tables: name, kind, shape).
+        #[arg(long)]
+        geometry: PathBuf,
+        /// Element order p, 1 to 4.
+        #[arg(long, default_value_t = 3)]
+        order: usize,
+        /// equispaced or gauss_lobatto.
+        #[arg(long, default_value = "equispaced")]
+        spacing: String,
+        /// Pseudo-time steps of Algorithm 2.
+        #[arg(long, default_value_t = 10)]
+        steps: usize,
+        /// sliding (default) or dirichlet: how new nodes reach the shapes.
+        #[arg(long, default_value = "sliding")]
+        mode: String,
+        /// The curved mesh to write.
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Print quality figures of a quad or hex mesh (linear or high order) in Gmsh MSH 4.1 format.
     Quality {
         /// The mesh file.
         mesh: PathBuf,
@@ -92,6 +118,31 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo { out } => {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out).context("<built-in demo>")
+        }
+        Command::Curve { mesh, geometry, order, spacing, steps, mode, out } => {
+            deformesh::highorder::check_order(order).map_err(|e| anyhow::anyhow!("--order: {e}"))?;
+            anyhow::ensure!(steps >= 1, "--steps must be at least 1");
+            let spacing: deformesh::highorder::Spacing = serde_json::from_value(serde_json::Value::String(spacing.clone()))
+                .map_err(|_| anyhow::anyhow!("--spacing must be equispaced or gauss_lobatto, got `{spacing}`"))?;
+            let dirichlet = match mode.as_str() {
+                "sliding" => false,
+                "dirichlet" => true,
+                other => anyhow::bail!("--mode must be sliding or dirichlet, got `{other}`"),
+            };
+            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, ..Default::default() };
+            let job = deformesh::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
+            let r = deformesh::driver::curve_file(&job).map_err(anyhow::Error::from).with_context(|| mesh.display().to_string())?;
+            for g in &r.unbound_groups {
+                eprintln!("group `{g}` is not in the geometry file: its nodes stay where they are");
+            }
+            print!("{}", format_curved(&r.quality));
+            println!(
+                "boundary distance: nodes {:.3e}  sampled {:.3e}",
+                r.quality.boundary_node_distance, r.quality.boundary_sample_distance
+            );
+            println!("time: algorithm 2 {:.3}s ({} steps, {} halved)  certification {:.3}s  total {:.3}s", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
+            println!("wrote {}", r.outputs.join(", "));
+            Ok(())
         }
         Command::Quality { mesh, json } => {
             let (text, value, invalid) = match quality_of(&mesh)? {
@@ -239,26 +290,6 @@ fn format_curved(q: &CurvedQuality) -> String {
     )
 }
 
-/// The dimension and cell element type of an MSH 4.1 ASCII file, by a
-/// light scan of its element block headers (None if it does not scan:
-/// the reader then gives the precise error).
-fn cell_type_of(text: &str) -> Option<(usize, i64)> {
-    let mut lines = text.lines().skip_while(|l| l.trim() != "$Elements").skip(1);
-    let blocks: usize = lines.next()?.split_whitespace().next()?.parse().ok()?;
-    let mut best: Option<(usize, i64)> = None;
-    for _ in 0..blocks {
-        let h: Vec<i64> = lines.next()?.split_whitespace().map(|t| t.parse().ok()).collect::<Option<_>>()?;
-        let (dim, ty, count) = (*h.first()? as usize, *h.get(2)?, *h.get(3)? as usize);
-        if best.is_none_or(|b| dim > b.0) {
-            best = Some((dim, ty));
-        }
-        for _ in 0..count {
-            lines.next()?;
-        }
-    }
-    best
-}
-
 /// Quality figures of a linear or high-order quad or hex MSH file.
 fn quality_of(path: &Path) -> Result<Figures> {
     use deformesh::io::curved::CurvedMesh;
@@ -270,7 +301,7 @@ fn quality_of(path: &Path) -> Result<Figures> {
         Ok(Figures::Curved(q.map_err(anyhow::Error::from)?.1))
     };
     let text = std::fs::read(path).map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
-    match cell_type_of(&text) {
+    match deformesh::io::msh::cell_type_of(&text) {
         Some((2, 10 | 36 | 37)) => curved(certify_mesh(&CurvedMesh::<2>::read_msh(path).map_err(named)?)),
         Some((3, 12 | 92 | 93)) => curved(certify_mesh(&CurvedMesh::<3>::read_msh(path).map_err(named)?)),
         _ => Ok(Figures::Linear(linear_quality_of(path).map_err(named)?)),

@@ -388,3 +388,42 @@ fn a_case_name_cannot_leave_the_output_folder() {
     assert_eq!(ran.code, Some(0), "{}", ran.stderr);
     assert!(dir.path().join("out").join(".._.._escaped").join("report.json").exists(), "{:?}", files_in(&dir.path().join("out")));
 }
+
+// ------------------------------------------------------------ curve
+
+fn cylinder() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cylinder_bl_coarse.msh")
+}
+
+const WALL: &str = "[[group]]\nname = \"wall\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 0.5 }\n";
+
+#[test]
+fn curve_writes_a_certified_mesh_that_quality_reads() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("geo.toml"), WALL).unwrap();
+    let cyl = cylinder();
+    let ran = deformesh(dir.path(), &["curve", path_str(&cyl), "--geometry", "geo.toml", "--order", "2", "-o", "out/cyl.msh"]);
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+    assert!(ran.stderr.contains("group `farfield` is not in the geometry file"), "{}", ran.stderr);
+    assert!(ran.stdout.contains("invalid elements: 0"), "{}", ran.stdout);
+    assert_eq!(files_in(&dir.path().join("out")), vec!["cyl.msh", "cyl.png", "cyl.report.json", "cyl.vtu"]);
+    let q = deformesh(dir.path(), &["quality", "out/cyl.msh"]);
+    assert_eq!(q.code, Some(0), "{}", q.stderr);
+    assert!(q.stdout.starts_with("order 2 elements 368"), "{}", q.stdout);
+}
+
+#[test]
+fn curve_bad_arguments_are_clean_errors() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("geo.toml"), WALL.replace("\"wall\"", "\"hull\"")).unwrap();
+    let cyl = cylinder();
+    let ran = deformesh(dir.path(), &["curve", path_str(&cyl), "--geometry", "geo.toml", "-o", "out/cyl.msh"]);
+    assert_eq!(ran.code, Some(1));
+    assert!(ran.stderr.contains("geo.toml") && ran.stderr.contains("no boundary group `hull`"), "{}", ran.stderr);
+    for (flag, value, needle) in [("--order", "5", "order 5 is not supported"), ("--spacing", "chebyshev", "--spacing must be"), ("--mode", "glide", "--mode must be")] {
+        let ran = deformesh(dir.path(), &["curve", path_str(&cyl), "--geometry", "geo.toml", flag, value, "-o", "out/cyl.msh"]);
+        assert_eq!(ran.code, Some(1), "{flag}");
+        assert!(ran.stderr.contains(needle) && !ran.stderr.contains("panicked"), "{}", ran.stderr);
+    }
+    assert!(!dir.path().join("out").exists());
+}

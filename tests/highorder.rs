@@ -6,8 +6,7 @@ mod common;
 use deformesh::case::{AnySetup, Case};
 use deformesh::deform::{BoundaryPart, Deformation, MoveMode, PartKind};
 use deformesh::driver::{run_any, Report, RunError};
-use deformesh::highorder::curve::{certify_mesh, curve, CurveError, CurveOptions};
-use deformesh::io::curved::CurvedMesh;
+use deformesh::highorder::curve::{curve, CurveError, CurveOptions};
 use deformesh::mesh::QuadMesh;
 use std::path::Path;
 
@@ -24,64 +23,6 @@ fn run_case(file: &str, out: &Path, edit: impl Fn(&mut Case)) -> Result<Report, 
     run_any(setup, out, |_| {})
 }
 
-/// Our certificates per element, from the written file.
-fn our_certificates<const D: usize>(file: &Path) -> Vec<deformesh::highorder::Certificate> {
-    let mesh = CurvedMesh::<D>::read_msh(file).unwrap();
-    certify_mesh(&mesh).unwrap().0
-}
-
-/// How Gmsh's figures compare with ours.
-#[derive(Debug, Default)]
-struct Agreement {
-    /// Largest relative difference of minDetJac on elements whose det J
-    /// varies less than 20× (min/max ≥ 0.05).
-    shaped: f64,
-    /// Largest difference relative to the element's max det J, on the
-    /// nearly degenerate rest.
-    degenerate: f64,
-    /// Nearly degenerate elements (min/max < 0.05).
-    degenerate_count: usize,
-    /// Elements whose Gmsh minSJ is not positive (Gmsh bounds the scaled
-    /// Jacobian from below; near a straight angle its bound goes under 0).
-    sj_not_positive: usize,
-}
-
-/// The real Gmsh opens `file`, finds `count` elements of type `ty`, finds
-/// every one valid by minDetJac, and its minDetJac agrees with ours.
-fn gmsh_agrees<const D: usize>(file: &Path, ty: i64, count: usize) -> Agreement {
-    let g = common::run_checker("check_msh.py", file);
-    assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
-    let block = if D == 2 { &g["elements_2d"] } else { &g["elements_3d"] };
-    let gmin = common::floats(&block["minDetJac"]);
-    let gsj = common::floats(&block["minSJ"]);
-    let ours = our_certificates::<D>(file);
-    assert_eq!(gmin.len(), ours.len());
-    // Gmsh's reference cell is [−1,1]^d: its det J is ours / 2^d
-    let scale = if D == 2 { 0.25 } else { 0.125 };
-    let mut a = Agreement::default();
-    for (k, (g, o)) in gmin.iter().zip(&ours).enumerate() {
-        assert!(*g > 0.0, "Gmsh finds element {k} invalid: minDetJac {g}");
-        let (lo, hi) = (scale * o.min_det_lower, scale * o.max_det);
-        // both are lower bounds from Bézier coefficients; ours is refined
-        // until it is within 1e-7 of a value det J takes
-        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
-        if lo / hi >= 0.05 {
-            a.shaped = a.shaped.max((g - lo).abs() / lo);
-            assert!(o.min_scaled_jacobian > 0.0);
-        } else {
-            a.degenerate_count += 1;
-            a.degenerate = a.degenerate.max((g - lo).abs() / hi);
-        }
-        if gsj[k] <= 0.0 {
-            a.sj_not_positive += 1;
-            assert!(o.min_scaled_jacobian < 0.02, "element {k}: Gmsh's minSJ {} but ours {}", gsj[k], o.min_scaled_jacobian);
-        }
-    }
-    assert!(a.shaped < 1.5e-3, "Gmsh's minDetJac and ours differ by {:e} relative", a.shaped);
-    assert!(a.degenerate < 1e-3, "on nearly degenerate elements Gmsh's minDetJac and ours differ by {:e} of max det J", a.degenerate);
-    a
-}
-
 fn check_case<const D: usize>(file: &str, ty: i64, edit: impl Fn(&mut Case)) {
     let dir = tempfile::tempdir().unwrap();
     let report = run_case(file, dir.path(), edit).unwrap_or_else(|e| panic!("{file}: {e}"));
@@ -90,7 +31,7 @@ fn check_case<const D: usize>(file: &str, ty: i64, edit: impl Fn(&mut Case)) {
     assert!(h.quality.min_det_j > 0.0);
     assert!(h.quality.boundary_node_distance < 1e-10, "{file}: a boundary node is {:e} off its shape", h.quality.boundary_node_distance);
     assert!(h.quality.boundary_sample_distance < 1e-2, "{file}: curved boundary {:e} off", h.quality.boundary_sample_distance);
-    let worst = gmsh_agrees::<D>(&dir.path().join("mesh.msh"), ty, report.cells);
+    let worst = common::gmsh_agrees::<D>(&dir.path().join("mesh.msh"), ty, report.cells);
     eprintln!(
         "{file}: {} elements, min det J {:.3e}, scaled Jacobian [{:.4}, {:.4}], boundary {:.2e} (nodes {:.1e}), Gmsh: {worst:?}, alg 1 {:.2}s, alg 2 {:.2}s, certify {:.2}s",
         report.cells,

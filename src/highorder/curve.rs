@@ -32,11 +32,14 @@ pub struct CurveOptions {
     /// Boundary samples per element edge direction for the geometric
     /// error (on top of the nodes).
     pub samples: usize,
+    /// New nodes of every curved part follow straight paths to their
+    /// images (the paper's Dirichlet data) instead of sliding.
+    pub dirichlet: bool,
 }
 
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: 10, flow: DeformOptions::default(), samples: 16 }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: 10, flow: DeformOptions::default(), samples: 16, dirichlet: false }
     }
 }
 
@@ -144,7 +147,14 @@ where
     let clock = Instant::now();
     let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?);
     let flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
-    let parts2 = refine_parts(parts);
+    let mut parts2 = refine_parts(parts);
+    if opts.dirichlet {
+        for part in parts2.iter_mut() {
+            if let PartKind::Move { mode, .. } = &mut part.kind {
+                *mode = crate::deform::MoveMode::Dirichlet;
+            }
+        }
+    }
     let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
     def.run(&[], |_| {}, |_| {})?;
     let node_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);

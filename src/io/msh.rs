@@ -431,6 +431,26 @@ fn push_element_block<'e>(
 
 // ---------------------------------------------------------------- reading
 
+/// The dimension and cell element type of an MSH 4.1 ASCII file, by a
+/// light scan of its element block headers (None if it does not scan:
+/// the reader then gives the precise error).
+pub fn cell_type_of(text: &str) -> Option<(usize, i64)> {
+    let mut lines = text.lines().skip_while(|l| l.trim() != "$Elements").skip(1);
+    let blocks: usize = lines.next()?.split_whitespace().next()?.parse().ok()?;
+    let mut best: Option<(usize, i64)> = None;
+    for _ in 0..blocks {
+        let h: Vec<i64> = lines.next()?.split_whitespace().map(|t| t.parse().ok()).collect::<Option<_>>()?;
+        let (dim, ty, count) = (*h.first()? as usize, *h.get(2)?, *h.get(3)? as usize);
+        if best.is_none_or(|b| dim > b.0) {
+            best = Some((dim, ty));
+        }
+        for _ in 0..count {
+            lines.next()?;
+        }
+    }
+    best
+}
+
 /// Reads an ASCII MSH 4.1 file (see [`parse_msh`]).
 pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
     parse_msh(&read_text(path)?)

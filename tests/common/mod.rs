@@ -39,3 +39,62 @@ pub fn run_checker(script: &str, file: &Path) -> Value {
 pub fn floats(v: &Value) -> Vec<f64> {
     v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
 }
+
+/// Our certificates per element, from the written file.
+pub fn our_certificates<const D: usize>(file: &Path) -> Vec<deformesh::highorder::Certificate> {
+    let mesh = deformesh::io::curved::CurvedMesh::<D>::read_msh(file).unwrap();
+    deformesh::highorder::curve::certify_mesh(&mesh).unwrap().0
+}
+
+/// How Gmsh's figures compare with ours.
+#[derive(Debug, Default)]
+pub struct Agreement {
+    /// Largest relative difference of minDetJac on elements whose det J
+    /// varies less than 20× (min/max ≥ 0.05).
+    pub shaped: f64,
+    /// Largest difference relative to the element's max det J, on the
+    /// nearly degenerate rest.
+    pub degenerate: f64,
+    /// Nearly degenerate elements (min/max < 0.05).
+    pub degenerate_count: usize,
+    /// Elements whose Gmsh minSJ is not positive (Gmsh bounds the scaled
+    /// Jacobian from below; near a straight angle its bound goes under 0).
+    pub sj_not_positive: usize,
+}
+
+/// The real Gmsh opens `file`, finds `count` elements of type `ty`, finds
+/// every one valid by minDetJac, and its minDetJac agrees with ours.
+pub fn gmsh_agrees<const D: usize>(file: &Path, ty: i64, count: usize) -> Agreement {
+    let g = run_checker("check_msh.py", file);
+    assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
+    let block = if D == 2 { &g["elements_2d"] } else { &g["elements_3d"] };
+    let gmin = floats(&block["minDetJac"]);
+    let gsj = floats(&block["minSJ"]);
+    let ours = our_certificates::<D>(file);
+    assert_eq!(gmin.len(), ours.len());
+    // Gmsh's reference cell is [−1,1]^d: its det J is ours / 2^d
+    let scale = if D == 2 { 0.25 } else { 0.125 };
+    let mut a = Agreement::default();
+    for (k, (g, o)) in gmin.iter().zip(&ours).enumerate() {
+        assert!(*g > 0.0, "Gmsh finds element {k} invalid: minDetJac {g}");
+        let (lo, hi) = (scale * o.min_det_lower, scale * o.max_det);
+        // both are lower bounds from Bézier coefficients; ours is refined
+        // until it is within 1e-7 of a value det J takes
+        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
+        if lo / hi >= 0.05 {
+            a.shaped = a.shaped.max((g - lo).abs() / lo);
+            assert!(o.min_scaled_jacobian > 0.0);
+        } else {
+            a.degenerate_count += 1;
+            a.degenerate = a.degenerate.max((g - lo).abs() / hi);
+        }
+        if gsj[k] <= 0.0 {
+            a.sj_not_positive += 1;
+            assert!(o.min_scaled_jacobian < 0.02, "element {k}: Gmsh's minSJ {} but ours {}", gsj[k], o.min_scaled_jacobian);
+        }
+    }
+    assert!(a.shaped < 1.5e-3, "Gmsh's minDetJac and ours differ by {:e} relative", a.shaped);
+    assert!(a.degenerate < 1e-3, "on nearly degenerate elements Gmsh's minDetJac and ours differ by {:e} of max det J", a.degenerate);
+    a
+}
+

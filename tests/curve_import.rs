@@ -1,0 +1,239 @@
+//! `deformesh curve`: a user's linear Gmsh mesh, its boundary groups bound
+//! to exact shapes, curved to certified high-order elements.
+
+mod common;
+
+use deformesh::driver::{curve_file, CurveJob, CurveReport, RunError};
+use deformesh::highorder::curve::CurveOptions;
+use deformesh::io::curved::CurvedMesh;
+use std::path::{Path, PathBuf};
+
+fn data(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file)
+}
+
+const CYLINDER: &str = r#"
+[[group]]
+name = "wall"
+kind = "curve"
+shape = { type = "circle", centre = [0.0, 0.0], radius = 0.5 }
+"#;
+
+const BALL: &str = r#"
+[[group]]
+name = "sphere"
+kind = "curve"
+shape = { type = "sphere", centre = [0.0, 0.0, 0.0], radius = 1.0 }
+[[group]]
+name = "plane_x0"
+kind = "slip"
+[[group]]
+name = "plane_y0"
+kind = "slip"
+[[group]]
+name = "plane_z0"
+kind = "slip"
+"#;
+
+fn job(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> CurveJob {
+    let g = dir.join("geometry.toml");
+    std::fs::write(&g, geometry).unwrap();
+    CurveJob {
+        input: data(mesh),
+        geometry: g,
+        output: dir.join(format!("curved{order}.msh")),
+        options: CurveOptions { order, steps, ..Default::default() },
+        width: 400,
+    }
+}
+
+fn curve_ok(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> CurveReport {
+    curve_file(&job(dir, mesh, geometry, order, steps)).unwrap_or_else(|e| panic!("{mesh} at p = {order}: {e}"))
+}
+
+#[test]
+fn cylinder_boundary_layer_curves_validly_at_p2_and_p3_and_gmsh_agrees() {
+    let dir = tempfile::tempdir().unwrap();
+    for (p, ty) in [(2, 10), (3, 36)] {
+        let r = curve_ok(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, p, 10);
+        assert_eq!(r.cells, 368);
+        assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        assert_eq!(r.unbound_groups, vec!["farfield".to_string()]);
+        // every wall node of the written file on the circle
+        let file = dir.path().join(format!("curved{p}.msh"));
+        let mesh = CurvedMesh::<2>::read_msh(&file).unwrap();
+        let wall = mesh.part_names.iter().position(|n| n == "wall").unwrap();
+        let mut on_wall = 0;
+        for b in mesh.boundary.iter().filter(|b| b.part == wall) {
+            for &n in &b.nodes {
+                let x = mesh.nodes[n];
+                assert!((x[0].hypot(x[1]) - 0.5).abs() < 1e-10, "wall node {n} at radius {}", x[0].hypot(x[1]));
+                on_wall += 1;
+            }
+        }
+        let linear = deformesh::io::msh::read_msh(&data("cylinder_bl_coarse.msh")).unwrap();
+        let wall_edges = linear.edges.iter().filter(|e| linear.part_names[e.part] == "wall").count();
+        assert_eq!(on_wall, wall_edges * (p + 1), "every wall element's nodes checked");
+        let a = common::gmsh_agrees::<2>(&file, ty, 368);
+        assert_eq!(a.sj_not_positive, 0);
+        eprintln!(
+            "cylinder p = {p}: min det J {:.3e}, scaled Jacobian [{:.4}, {:.4}], wall within {:.1e} (sampled {:.1e}), Gmsh {a:?}, {:.2}s",
+            r.quality.min_det_j, r.quality.scaled_jacobian.min, r.quality.scaled_jacobian.max, r.quality.boundary_node_distance, r.quality.boundary_sample_distance, r.total_s
+        );
+        for ext in ["msh", "vtu", "png", "report.json"] {
+            assert!(dir.path().join(format!("curved{p}.{ext}")).exists());
+        }
+    }
+}
+
+#[test]
+fn ball_octant_curves_validly_at_p2_and_p3() {
+    let dir = tempfile::tempdir().unwrap();
+    for p in [2, 3] {
+        // three steps are enough for the local motion and keep CI short
+        let r = curve_ok(dir.path(), "ball_octant_hex.msh", BALL, p, 3);
+        assert_eq!(r.cells, 2680);
+        assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        assert!(r.unbound_groups.is_empty());
+        assert!(r.quality.boundary_node_distance < 1e-10);
+        assert!(r.quality.boundary_sample_distance < 1e-4, "{:e}", r.quality.boundary_sample_distance);
+        eprintln!("ball octant p = {p}: min det J {:.3e}, scaled Jacobian min {:.4}, sampled {:.1e}, {:.1}s", r.quality.min_det_j, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
+    }
+}
+
+#[test]
+fn a_level_set_wall_curves_like_the_circle() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = CYLINDER.replace("shape = { type = \"circle\", centre = [0.0, 0.0], radius = 0.5 }", "level_set = \"x^2 + y^2 - 0.25\"");
+    let r = curve_ok(dir.path(), "cylinder_bl_coarse.msh", &ls, 2, 10);
+    assert!(r.quality.invalid_elements.is_empty());
+    // the level set's Newton foot points of chord points are radial here
+    assert!(r.quality.boundary_node_distance < 1e-10, "{:e}", r.quality.boundary_node_distance);
+}
+
+#[test]
+fn geometry_errors_name_the_group_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = CYLINDER.replace("name = \"wall\"", "name = \"walls\"");
+    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4)).err().expect("an error").to_string();
+    assert!(e.contains("geometry.toml") && e.contains("`walls`") && e.contains("wall, farfield"), "{e}");
+    let bad = CYLINDER.replace("kind = \"curve\"", "kind = \"bend\"");
+    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4)).err().expect("an error").to_string();
+    assert!(e.contains("geometry.toml") && e.contains("unknown variant `bend`"), "{e}");
+    assert!(!dir.path().join("curved2.msh").exists());
+}
+
+/// The input, damaged by `edit`, written to `dir`.
+fn damaged(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(data("cylinder_bl_coarse.msh")).unwrap();
+    let path = dir.join("damaged.msh");
+    std::fs::write(&path, edit(text)).unwrap();
+    path
+}
+
+fn curve_error(dir: &Path, input: PathBuf) -> RunError {
+    let mut j = job(dir, "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
+    j.input = input;
+    curve_file(&j).err().expect("an error")
+}
+
+#[test]
+fn reader_errors_name_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: Vec<(Box<dyn Fn(String) -> String>, &str)> = vec![
+        (Box::new(|t: String| t[..t.len() / 2].to_string()), "truncated"),
+        (Box::new(|t: String| t.replacen("$Nodes\n", "$Nodes\n7 ", 1)), "line"),
+        (Box::new(|t: String| t.replacen("4.1 0 8", "2.2 0 8", 1)), "re-save it as ASCII MSH 4.1"),
+        (Box::new(|t: String| {
+            // the first node's x becomes NaN
+            let i = t.find("$Nodes").unwrap();
+            let after = &t[i..];
+            let line_start = i + after.match_indices('\n').nth(3).unwrap().0 + 1;
+            let line_end = line_start + t[line_start..].find(' ').unwrap();
+            format!("{}nan{}", &t[..line_start], &t[line_end..])
+        }), "non-finite coordinate"),
+    ];
+    for (edit, needle) in cases {
+        let e = curve_error(dir.path(), damaged(dir.path(), edit)).to_string();
+        assert!(e.contains(needle), "`{needle}` not in: {e}");
+    }
+    // an element type the reader does not take: a triangle block
+    let tri = damaged(dir.path(), |t| {
+        let i = t.find("$Elements").unwrap();
+        let j = i + t[i..].match_indices('\n').nth(1).unwrap().0 + 1; // the first block header
+        let header: Vec<String> = t[j..].lines().next().unwrap().split_whitespace().map(String::from).collect();
+        let new = format!("{} {} 2 {}", header[0], header[1], header[3]);
+        format!("{}{}{}", &t[..j], new, &t[j + t[j..].find('\n').unwrap()..])
+    });
+    let e = curve_error(dir.path(), tri).to_string();
+    assert!(e.contains("unsupported element type 2") && e.contains("line"), "{e}");
+}
+
+#[test]
+fn an_inverted_input_cell_is_listed() {
+    let dir = tempfile::tempdir().unwrap();
+    // swap two nodes of the first quad: it turns inside out
+    let bad = damaged(dir.path(), |t| {
+        let i = t.find("$Elements").unwrap();
+        let mut out = String::new();
+        let mut swapped = false;
+        let mut in_quads = false;
+        for (k, line) in t.lines().enumerate() {
+            let mut l = line.to_string();
+            let f: Vec<&str> = line.split_whitespace().collect();
+            if k > t[..i].lines().count() && f.len() == 4 && f[2] == "3" {
+                in_quads = true;
+            } else if in_quads && !swapped && f.len() == 5 {
+                l = format!("{} {} {} {} {}", f[0], f[2], f[1], f[3], f[4]);
+                swapped = true;
+            }
+            out.push_str(&l);
+            out.push('\n');
+        }
+        assert!(swapped);
+        out
+    });
+    let e = curve_error(dir.path(), bad);
+    assert_eq!(e.exit_code(), 2);
+    let msg = e.to_string();
+    assert!(msg.contains("already has") && msg.contains("invalid cell"), "{msg}");
+}
+
+#[test]
+fn fuzzed_inputs_never_panic() {
+    // a bounded mutation fuzz of the reader: random byte flips, deletions
+    // and duplications of the cylinder file; every outcome is Ok or a
+    // clean error, never a panic (fuzz/ holds a cargo-fuzz target for
+    // longer runs)
+    let text = std::fs::read(data("cylinder_bl_coarse.msh")).unwrap();
+    let mut seed = 0x9e3779b97f4a7c15u64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    for _ in 0..300 {
+        let mut bytes = text.clone();
+        for _ in 0..(1 + next() % 8) {
+            let at = (next() as usize) % bytes.len();
+            match next() % 4 {
+                0 => bytes[at] = b"0123456789 -.e\nx$"[(next() % 17) as usize],
+                1 => drop(bytes.remove(at)),
+                2 => bytes.truncate(at.max(1)),
+                _ => {
+                    let end = (at + 40).min(bytes.len());
+                    let chunk = bytes[at..end].to_vec();
+                    bytes.splice(at..at, chunk);
+                }
+            }
+        }
+        let s = String::from_utf8_lossy(&bytes);
+        let r = std::panic::catch_unwind(|| {
+            let _ = deformesh::io::msh::parse_msh(&s);
+            let _ = CurvedMesh::<2>::parse_msh(&s);
+            let _ = deformesh::io::msh::cell_type_of(&s);
+        });
+        assert!(r.is_ok(), "the reader panicked on a mutated file");
+    }
+}
