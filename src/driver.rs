@@ -557,8 +557,8 @@ pub struct CurveReport {
 /// Algorithms 2 and 3, and writes the curved mesh (MSH, VTU, PNG, report)
 /// only if every element is certified valid.
 pub fn curve_file(job: &CurveJob) -> Result<CurveReport, RunError> {
-    let text = std::fs::read(&job.input).map_err(|source| RunError::Read { path: job.input.clone(), source })?;
-    let text = String::from_utf8_lossy(&text);
+    let bytes = std::fs::read(&job.input).map_err(|source| RunError::Read { path: job.input.clone(), source })?;
+    let text = crate::io::msh::msh_text(&bytes)?;
     let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
     match crate::io::msh::cell_type_of(&text) {

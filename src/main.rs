@@ -41,7 +41,7 @@ enum Command {
     /// OUT.vtu, OUT.png, OUT.report.json beside it) if every element is
     /// certified valid.
     Curve {
-        /// The linear quad or hex mesh (Gmsh MSH 4.1, ASCII).
+        /// The linear quad or hex mesh (Gmsh MSH 4.1, ASCII or binary).
         mesh: PathBuf,
         /// The geometry file (TOML `[[group]]` tables: name, kind, shape).
         #[arg(long)]
@@ -300,7 +300,7 @@ fn quality_of(path: &Path) -> Result<Figures> {
     let curved = |q: Result<(Vec<deformesh::highorder::Certificate>, CurvedQuality), deformesh::highorder::HighOrderError>| -> Result<Figures> {
         Ok(Figures::Curved(q.map_err(anyhow::Error::from)?.1))
     };
-    let text = std::fs::read(path).map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
+    let text = std::fs::read(path).ok().and_then(|b| deformesh::io::msh::msh_text(&b).ok()).unwrap_or_default();
     match deformesh::io::msh::cell_type_of(&text) {
         Some((2, 10 | 36 | 37)) => curved(certify_mesh(&CurvedMesh::<2>::read_msh(path).map_err(named)?)),
         Some((3, 12 | 92 | 93)) => curved(certify_mesh(&CurvedMesh::<3>::read_msh(path).map_err(named)?)),

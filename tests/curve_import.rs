@@ -213,8 +213,11 @@ fn fuzzed_inputs_never_panic() {
         seed ^= seed << 17;
         seed
     };
-    for _ in 0..300 {
-        let mut bytes = text.clone();
+    let binary_header: Vec<u8> = String::from_utf8_lossy(&text).replacen("4.1 0 8", "4.1 1 8", 1).into_bytes();
+    for round in 0..3000 {
+        // every other round claims to be binary: the binary translation
+        // then reads text as numbers, the harshest input it can get
+        let mut bytes = if round % 2 == 0 { text.clone() } else { binary_header.clone() };
         for _ in 0..(1 + next() % 8) {
             let at = (next() as usize) % bytes.len();
             match next() % 4 {
@@ -228,12 +231,45 @@ fn fuzzed_inputs_never_panic() {
                 }
             }
         }
-        let s = String::from_utf8_lossy(&bytes);
         let r = std::panic::catch_unwind(|| {
+            let s = deformesh::io::msh::msh_text(&bytes).unwrap_or_else(|_| String::from_utf8_lossy(&bytes).into_owned());
             let _ = deformesh::io::msh::parse_msh(&s);
             let _ = CurvedMesh::<2>::parse_msh(&s);
             let _ = deformesh::io::msh::cell_type_of(&s);
         });
         assert!(r.is_ok(), "the reader panicked on a mutated file");
     }
+}
+
+#[test]
+fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/to_binary.py");
+    for file in ["cylinder_bl_coarse.msh", "ball_octant_hex.msh"] {
+        let bin = dir.path().join(format!("bin_{file}"));
+        let out = std::process::Command::new(common::python()).arg(&script).arg(data(file)).arg(&bin).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(deformesh::io::msh_binary::is_binary(&std::fs::read(&bin).unwrap()));
+        if file.starts_with("cyl") {
+            let (a, b) = (deformesh::io::msh::read_msh(&data(file)).unwrap(), deformesh::io::msh::read_msh(&bin).unwrap());
+            assert_eq!((a.nodes.len(), a.cells.len(), a.edges.len()), (b.nodes.len(), b.cells.len(), b.edges.len()));
+            assert_eq!(a.part_names, b.part_names);
+            let moved = a.nodes.iter().zip(&b.nodes).map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs())).fold(0.0, f64::max);
+            assert_eq!(moved, 0.0, "binary doubles are exact");
+            assert_eq!(a.cells, b.cells);
+        } else {
+            let (a, b) = (deformesh::io::msh::read_hex_msh(&data(file)).unwrap(), deformesh::io::msh::read_hex_msh(&bin).unwrap());
+            assert_eq!((a.nodes, a.cells, a.part_names), (b.nodes, b.cells, b.part_names));
+        }
+    }
+    // and `curve` takes the binary file
+    let bin = dir.path().join("bin_cylinder_bl_coarse.msh");
+    let mut j = job(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
+    j.input = bin;
+    let r = curve_file(&j).unwrap();
+    assert!(r.quality.invalid_elements.is_empty());
+    // a binary file cut short is a clean error
+    let bytes = std::fs::read(dir.path().join("bin_ball_octant_hex.msh")).unwrap();
+    let e = deformesh::io::msh::msh_text(&bytes[..bytes.len() / 2]).err().expect("truncated").to_string();
+    assert!(e.contains("truncated"), "{e}");
 }

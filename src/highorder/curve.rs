@@ -17,6 +17,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
 
+/// Above this many unknowns a 3D Algorithm 2 with `solver = auto` uses
+/// conjugate gradients.
+pub const ALG2_CG_UNKNOWNS: usize = 20_000;
+
 /// Options of Algorithms 2 and 3.
 #[derive(Clone, Debug)]
 pub struct CurveOptions {
@@ -146,7 +150,14 @@ where
     let p = opts.order;
     let clock = Instant::now();
     let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?);
-    let flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
+    let mut flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
+    // Algorithm 2 moves nodes a little from the previous step's solution:
+    // warm-started CG needs few iterations, while a 3D Cholesky's fill
+    // grows fast (measured on the quarter ball, p = 2 at 16³, 1.1e5
+    // unknowns: Cholesky 132 s and 2.1 GB for 10 steps)
+    if D == 3 && flow.solver == crate::deform::SolverChoice::Auto && D * sub.fine.nodes().len() > ALG2_CG_UNKNOWNS {
+        flow.solver = crate::deform::SolverChoice::Cg;
+    }
     let mut parts2 = refine_parts(parts);
     if opts.dirichlet {
         for part in parts2.iter_mut() {

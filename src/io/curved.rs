@@ -537,11 +537,7 @@ impl<const D: usize> CurvedMesh<D> {
 
     /// Reads an ASCII MSH 4.1 file (see [`CurvedMesh::parse_msh`]).
     pub fn read_msh(path: &Path) -> Result<CurvedMesh<D>, MshError> {
-        let bytes = std::fs::read(path).map_err(|source| MshError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::parse_msh(&String::from_utf8_lossy(&bytes))
+        Self::parse_msh(&super::msh::read_text(path)?)
     }
 
     /// Parses ASCII MSH 4.1 text with Lagrange quads (`D = 2`: types 3, 10,

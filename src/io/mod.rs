@@ -11,6 +11,7 @@ macro_rules! put {
 
 pub mod curved;
 pub mod msh;
+pub mod msh_binary;
 pub mod vtu;
 
 use std::fs;

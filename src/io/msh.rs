@@ -488,11 +488,20 @@ pub fn parse_hex_msh(text: &str) -> Result<HexMesh, MshError> {
 }
 
 /// The file as text, for either parser.
-fn read_text(path: &Path) -> Result<String, MshError> {
+pub(crate) fn read_text(path: &Path) -> Result<String, MshError> {
     let bytes = std::fs::read(path).map_err(|source| MshError::Io {
         path: path.to_owned(),
         source,
     })?;
+    msh_text(&bytes)
+}
+
+/// The ASCII MSH text of a file's bytes: binary MSH 4.1 is translated
+/// ([`super::msh_binary`]), anything else read as text.
+pub fn msh_text(bytes: &[u8]) -> Result<String, MshError> {
+    if super::msh_binary::is_binary(bytes) {
+        return super::msh_binary::binary_to_ascii(bytes);
+    }
     // A binary file is not UTF-8; the lossy text still has a readable
     // header, so the reader can say "binary" instead of failing obscurely.
     Ok(String::from_utf8_lossy(&bytes).into_owned())
