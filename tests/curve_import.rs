@@ -219,6 +219,9 @@ fn fuzzed_inputs_never_panic() {
         // then reads text as numbers, the harshest input it can get
         let mut bytes = if round % 2 == 0 { text.clone() } else { binary_header.clone() };
         for _ in 0..(1 + next() % 8) {
+            if bytes.is_empty() {
+                break;
+            }
             let at = (next() as usize) % bytes.len();
             match next() % 4 {
                 0 => bytes[at] = b"0123456789 -.e\nx$"[(next() % 17) as usize],
