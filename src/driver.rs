@@ -8,7 +8,7 @@
 use crate::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
 use crate::deform::refine::Subdividable;
 use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh};
-use crate::highorder::curve::{curve, CurveError, CurveOptions, Curved, CurvedQuality};
+use crate::highorder::curve::{curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
 use crate::highorder::Spacing;
 use crate::io::curved::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, MshError};
@@ -92,6 +92,9 @@ impl RunError {
 /// Progress of a run, for a bar or log lines.
 #[derive(Clone, Copy, Debug)]
 pub struct Progress {
+    /// Which algorithm is running: 1 (the deformation) or 2 (the
+    /// high-order boundary nodes).
+    pub algorithm: u8,
     /// Pseudo-time reached.
     pub t: f64,
     /// Accepted steps.
@@ -209,8 +212,8 @@ pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D
     /// A picture of the mesh at positions `nodes`, cells coloured by
     /// `values`.
     fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
-    /// Algorithms 2 and 3 on this mesh.
-    fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions) -> Result<Curved<D>, CurveError>;
+    /// Algorithms 2 and 3 on this mesh, reporting Algorithm 2's progress.
+    fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<D>, CurveError>;
     /// A picture of a curved mesh, elements coloured by `values`.
     fn draw_curved(mesh: &CurvedMesh<D>, values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
 }
@@ -259,8 +262,8 @@ impl Outputs<2, 4> for QuadMesh {
         let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
         render_mesh(&m, values, &opts)
     }
-    fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions) -> Result<Curved<2>, CurveError> {
-        curve(self, parts, opts)
+    fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
+        curve_with_progress(self, parts, opts, |t, steps, halved| progress(Progress { algorithm: 2, t, steps, halved }))
     }
     fn draw_curved(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
         let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
@@ -293,8 +296,8 @@ impl Outputs<3, 8> for HexMesh {
         let m = HexMesh { nodes: nodes.to_vec(), ..self.clone() };
         render_hex(&m, values, &options3(look))
     }
-    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions) -> Result<Curved<3>, CurveError> {
-        curve(self, parts, opts)
+    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
+        curve_with_progress(self, parts, opts, |t, steps, halved| progress(Progress { algorithm: 2, t, steps, halved }))
     }
     fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
         render_curved_hex(mesh, values, &options3(look))
@@ -350,7 +353,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
             if output.animation && (d.stats.steps % every == 0 || d.t >= 1.0) {
                 anim.push(snapshot(d));
             }
-            progress(Progress { t: d.t, steps: d.stats.steps, halved: d.stats.halved });
+            progress(Progress { algorithm: 1, t: d.t, steps: d.stats.steps, halved: d.stats.halved });
         },
     )?;
     let quality = def.mesh.quality();
@@ -360,7 +363,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let algorithm1_s = clock.elapsed().as_secs_f64();
     let curved = match &highorder {
         Some(opts) => {
-            let c = def.mesh.curve(def.parts(), opts)?;
+            let c = def.mesh.curve(def.parts(), opts, &mut progress)?;
             if !c.quality.invalid_elements.is_empty() {
                 return Err(RunError::InvalidCurved { order: opts.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
             }
@@ -556,7 +559,7 @@ pub struct CurveReport {
 /// `deformesh curve`: reads a linear mesh and a geometry file, runs
 /// Algorithms 2 and 3, and writes the curved mesh (MSH, VTU, PNG, report)
 /// only if every element is certified valid.
-pub fn curve_file(job: &CurveJob) -> Result<CurveReport, RunError> {
+pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     let bytes = std::fs::read(&job.input).map_err(|source| RunError::Read { path: job.input.clone(), source })?;
     let text = crate::io::msh::msh_text(&bytes)?;
     let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
@@ -565,19 +568,25 @@ pub fn curve_file(job: &CurveJob) -> Result<CurveReport, RunError> {
         Some((3, _)) => {
             let mesh = crate::io::msh::parse_hex_msh(&text)?;
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job)
+            curve_mesh(&mesh, &parts, unbound, job, &mut progress)
         }
         _ => {
             let mesh = crate::io::msh::parse_msh(&text)?;
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job)
+            curve_mesh(&mesh, &parts, unbound, job, &mut progress)
         }
     }
 }
 
-fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(mesh: &M, parts: &[BoundaryPart<D>], unbound: Vec<String>, job: &CurveJob) -> Result<CurveReport, RunError> {
+fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
+    mesh: &M,
+    parts: &[BoundaryPart<D>],
+    unbound: Vec<String>,
+    job: &CurveJob,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<CurveReport, RunError> {
     let clock = Instant::now();
-    let c = mesh.curve(parts, &job.options)?;
+    let c = mesh.curve(parts, &job.options, progress)?;
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
     }

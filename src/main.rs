@@ -131,7 +131,10 @@ fn run(cli: Cli) -> Result<()> {
             };
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, ..Default::default() };
             let job = deformesh::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
-            let r = deformesh::driver::curve_file(&job).map_err(anyhow::Error::from).with_context(|| mesh.display().to_string())?;
+            let bar = Bar::new();
+            let r = deformesh::driver::curve_file(&job, |p| bar.update(p)).map_err(anyhow::Error::from).with_context(|| mesh.display().to_string());
+            bar.finish();
+            let r = r?;
             for g in &r.unbound_groups {
                 eprintln!("group `{g}` is not in the geometry file: its nodes stay where they are");
             }
@@ -239,13 +242,14 @@ impl Bar {
         match &self.bar {
             Some(b) => {
                 b.set_position((p.t * 1000.0) as u64);
-                b.set_message(format!("{:.3}  steps {}  halved {}", p.t, p.steps, p.halved));
+                b.set_message(format!("{:.3}  algorithm {}  steps {}  halved {}", p.t, p.algorithm, p.steps, p.halved));
             }
             None => {
-                let decile = (p.t * 10.0 + 1e-9).floor() as i64;
+                // deciles of each algorithm in turn: algorithm 2 starts again at t = 0
+                let decile = 100 * p.algorithm as i64 + (p.t * 10.0 + 1e-9).floor() as i64;
                 if decile > self.last.get() {
                     self.last.set(decile);
-                    eprintln!("t = {:.3}  steps {}  halved {}", p.t, p.steps, p.halved);
+                    eprintln!("algorithm {}: t = {:.3}  steps {}  halved {}", p.algorithm, p.t, p.steps, p.halved);
                 }
             }
         }

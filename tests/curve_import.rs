@@ -48,7 +48,7 @@ fn job(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> Cu
 }
 
 fn curve_ok(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> CurveReport {
-    curve_file(&job(dir, mesh, geometry, order, steps)).unwrap_or_else(|e| panic!("{mesh} at p = {order}: {e}"))
+    curve_file(&job(dir, mesh, geometry, order, steps), |_| {}).unwrap_or_else(|e| panic!("{mesh} at p = {order}: {e}"))
 }
 
 #[test]
@@ -115,10 +115,10 @@ fn a_level_set_wall_curves_like_the_circle() {
 fn geometry_errors_name_the_group_and_nothing_is_written() {
     let dir = tempfile::tempdir().unwrap();
     let bad = CYLINDER.replace("name = \"wall\"", "name = \"walls\"");
-    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4)).err().expect("an error").to_string();
+    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4), |_| {}).err().expect("an error").to_string();
     assert!(e.contains("geometry.toml") && e.contains("`walls`") && e.contains("wall, farfield"), "{e}");
     let bad = CYLINDER.replace("kind = \"curve\"", "kind = \"bend\"");
-    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4)).err().expect("an error").to_string();
+    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4), |_| {}).err().expect("an error").to_string();
     assert!(e.contains("geometry.toml") && e.contains("unknown variant `bend`"), "{e}");
     assert!(!dir.path().join("curved2.msh").exists());
 }
@@ -134,7 +134,7 @@ fn damaged(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
 fn curve_error(dir: &Path, input: PathBuf) -> RunError {
     let mut j = job(dir, "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
     j.input = input;
-    curve_file(&j).err().expect("an error")
+    curve_file(&j, |_| {}).err().expect("an error")
 }
 
 #[test]
@@ -269,7 +269,7 @@ fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
     let bin = dir.path().join("bin_cylinder_bl_coarse.msh");
     let mut j = job(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
     j.input = bin;
-    let r = curve_file(&j).unwrap();
+    let r = curve_file(&j, |_| {}).unwrap();
     assert!(r.quality.invalid_elements.is_empty());
     // a binary file cut short is a clean error
     let bytes = std::fs::read(dir.path().join("bin_ball_octant_hex.msh")).unwrap();

@@ -142,6 +142,21 @@ where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
 {
+    curve_with_progress(coarse, parts, opts, |_, _, _| {})
+}
+
+/// [`curve`], calling `progress(t, steps, halved)` after every accepted
+/// step of Algorithm 2.
+pub fn curve_with_progress<M, const D: usize, const N: usize>(
+    coarse: &M,
+    parts: &[BoundaryPart<D>],
+    opts: &CurveOptions,
+    mut progress: impl FnMut(f64, usize, usize),
+) -> Result<Curved<D>, CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
     check_order(opts.order)?;
     let bad = coarse.invalid_cells(coarse.nodes());
     if !bad.is_empty() {
@@ -167,7 +182,7 @@ where
         }
     }
     let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
-    def.run(&[], |_| {}, |_| {})?;
+    def.run(&[], |_| {}, |d| progress(d.t, d.stats.steps, d.stats.halved))?;
     let node_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
     let alg2 = clock.elapsed().as_secs_f64();
     let mesh = CurvedMesh {
