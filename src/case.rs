@@ -609,7 +609,7 @@ impl Case {
         let target = self.jacobian.field.build("jacobian", dim, base_dir).map_err(err)?;
         let floor = self.jacobian.floor.unwrap_or(0.0);
         if !(floor >= 0.0 && floor.is_finite()) {
-            return Err(err(format!("field `jacobian.floor`: must be a positive number, got {floor}")));
+            return Err(err(format!("field `jacobian.floor`: must be a number ≥ 0, got {floor}")));
         }
         Ok(JacobianField { target, path: self.jacobian.path.unwrap_or_default(), floor })
     }

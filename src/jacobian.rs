@@ -227,6 +227,11 @@ pub fn level_set_distance(phi: &Expr, x: Point3, far: f64) -> f64 {
     if v0 == 0.0 {
         return 0.0;
     }
+    if !v0.is_finite() {
+        // φ undefined here: a NaN g₁, reported, rather than a band that is
+        // silently absent
+        return f64::NAN;
+    }
     let first_order = if g0 > 0.0 { v0.abs() / g0.sqrt() } else { f64::INFINITY };
     if first_order > far {
         return first_order;

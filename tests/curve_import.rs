@@ -276,3 +276,12 @@ fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
     let e = deformesh::io::msh::msh_text(&bytes[..bytes.len() / 2]).err().expect("truncated").to_string();
     assert!(e.contains("truncated"), "{e}");
 }
+
+#[test]
+fn input_vertices_off_the_shape_show_in_the_node_distance() {
+    // the wall's own (old) nodes lie on r = 0.5; bound to r = 0.52 they
+    // stay, and the report must not hide it
+    let dir = tempfile::tempdir().unwrap();
+    let r = curve_ok(dir.path(), "cylinder_bl_coarse.msh", &CYLINDER.replace("radius = 0.5", "radius = 0.52"), 2, 4);
+    assert!((r.quality.boundary_node_distance - 0.02).abs() < 1e-9, "{}", r.quality.boundary_node_distance);
+}

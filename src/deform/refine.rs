@@ -187,10 +187,110 @@ fn tensor_indices<const D: usize>(p: usize) -> impl Iterator<Item = [usize; D]> 
     (0..n.pow(D as u32)).map(move |k| std::array::from_fn(|d| (k / n.pow(d as u32)) % n))
 }
 
+/// Why a mesh cannot be subdivided.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SubdivideError {
+    /// Fewer than two reference nodes.
+    #[error("subdivision needs at least the two end nodes of [0, 1], got {0}")]
+    TooFewNodes(usize),
+    /// A boundary element is not an edge (face) of any cell.
+    #[error("boundary element {index} (nodes {nodes:?}, group `{part}`) is not an edge or face of any cell")]
+    NotACellFacet {
+        /// Its index among the boundary elements.
+        index: usize,
+        /// Its nodes (0-based).
+        nodes: Vec<usize>,
+        /// Its group.
+        part: String,
+    },
+    /// Cell edges (faces) on the boundary that no boundary element covers:
+    /// their nodes would move freely.
+    #[error("{count} edge(s)/face(s) on the boundary of the mesh are in no boundary group (first with nodes {first:?}): save every boundary element with a physical group (in Gmsh, add the group, or set Mesh.SaveAll = 1)")]
+    Uncovered {
+        /// How many.
+        count: usize,
+        /// The nodes (0-based) of the first.
+        first: Vec<usize>,
+    },
+}
+
+/// The outward facets of a cell in cyclic order: its edges counter-
+/// clockwise (2D) or its faces counter-clockwise seen from outside (3D).
+fn cell_facets<const N: usize>(cell: &[usize; N]) -> Vec<Vec<usize>> {
+    const QUAD: [[usize; 2]; 4] = [[0, 1], [1, 2], [2, 3], [3, 0]];
+    const HEX: [[usize; 4]; 6] = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [0, 4, 7, 3]];
+    if N == 4 {
+        QUAD.iter().map(|f| f.iter().map(|&k| cell[k]).collect()).collect()
+    } else {
+        HEX.iter().map(|f| f.iter().map(|&k| cell[k]).collect()).collect()
+    }
+}
+
+/// `q` as a rotation of `f` (same orientation), of its reverse (opposite),
+/// or neither.
+fn orientation(q: &[usize], f: &[usize]) -> Option<bool> {
+    let n = f.len();
+    if n == 2 {
+        // an edge's rotation is its reverse: only the order tells
+        return (q.len() == 2 && (q[0] == f[0] || q[0] == f[1])).then_some(q[0] == f[0]);
+    }
+    let start = f.iter().position(|&v| v == q[0])?;
+    if (0..n).all(|k| q[k] == f[(start + k) % n]) {
+        return Some(true);
+    }
+    if (0..n).all(|k| q[k] == f[(start + n - k) % n]) {
+        return Some(false);
+    }
+    None
+}
+
+/// The boundary facets of `coarse`, each oriented like the outward facet
+/// of its cell (the flux quadrature relies on it: Gmsh keeps the
+/// orientation of the geometry's curves, which may run either way), and
+/// checked to cover the whole boundary.
+fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M) -> Result<Vec<(Vec<usize>, usize)>, SubdivideError> {
+    let key = |f: &[usize]| {
+        let mut k = f.to_vec();
+        k.sort_unstable();
+        k
+    };
+    // every cell facet, by its node set: how many cells hold it, and one of
+    // them in outward order
+    let mut owners: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
+    for cell in coarse.cells() {
+        for f in cell_facets(cell) {
+            owners.entry(key(&f)).and_modify(|o| o.0 += 1).or_insert((1, f));
+        }
+    }
+    let mut covered = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    for (index, (q, part)) in coarse.facets().into_iter().enumerate() {
+        let k = key(&q);
+        let outward = owners.get(&k).and_then(|(_, f)| orientation(&q, f).map(|same| (same, f)));
+        let Some((same, f)) = outward else {
+            let part = coarse.names().get(part).cloned().unwrap_or_else(|| format!("#{part}"));
+            return Err(SubdivideError::NotACellFacet { index, nodes: q, part });
+        };
+        out.push((if same { q } else { f.clone() }, part));
+        covered.insert(k);
+    }
+    let mut open: Vec<&Vec<usize>> = owners.iter().filter(|(k, o)| o.0 == 1 && !covered.contains(*k)).map(|(_, o)| &o.1).collect();
+    open.sort();
+    if let Some(first) = open.first() {
+        return Err(SubdivideError::Uncovered { count: open.len(), first: first.to_vec() });
+    }
+    Ok(out)
+}
+
 /// Splits every cell of `coarse` at the 1D reference nodes `t` (p + 1
 /// values in [0, 1] from 0 to 1, e.g. equispaced or Gauss–Lobatto).
-pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M, t: &[f64]) -> Subdivision<M, D> {
+/// Boundary facets are checked against the cells and oriented like them.
+pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M, t: &[f64]) -> Result<Subdivision<M, D>, SubdivideError> {
+    if t.len() < 2 {
+        return Err(SubdivideError::TooFewNodes(t.len()));
+    }
     let p = t.len() - 1;
+    let coarse_facets = oriented_facets(coarse)?;
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; D]> = Vec::new();
     let mut elements = Vec::with_capacity(coarse.cells().len());
@@ -224,7 +324,7 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
     let mut facet_corners = Vec::new();
     let mut edges: Vec<([[f64; D]; 2], Vec<usize>)> = Vec::new();
     let mut edge_ids: HashMap<(usize, usize), usize> = HashMap::new();
-    for (f, (q, part)) in coarse.facets().into_iter().enumerate() {
+    for (f, (q, part)) in coarse_facets.into_iter().enumerate() {
         let (nu, nv) = if D == 2 { (n1, 1) } else { (n1, n1) };
         let mut grid = Vec::with_capacity(nu * nv);
         for v in 0..nv {
@@ -264,7 +364,7 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
     }
     let coarse_nodes = (0..coarse.nodes().len()).map(|n| ids.get(&Key::Vertex(n)).copied().unwrap_or(usize::MAX)).collect();
     let fine = M::assemble(nodes, sub_cells, fine_facets, coarse.names().to_vec());
-    Subdivision { fine, elements, facets, coarse_nodes, p, facet_corners, edges, places }
+    Ok(Subdivision { fine, elements, facets, coarse_nodes, p, facet_corners, edges, places })
 }
 
 /// What a fine boundary node does during Algorithm 2.
@@ -654,7 +754,7 @@ mod tests {
     fn quad_subdivision_shares_nodes_and_counts_match() {
         let coarse = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 2);
         for p in 1..=4 {
-            let s = subdivide(&coarse, &equispaced(p));
+            let s = subdivide(&coarse, &equispaced(p)).unwrap();
             // a structured (3p+1)×(2p+1) grid
             assert_eq!(s.fine.nodes.len(), (3 * p + 1) * (2 * p + 1), "p = {p}");
             assert_eq!(s.fine.cells.len(), 6 * p * p);
@@ -684,7 +784,7 @@ mod tests {
         coarse.cells.iter_mut().for_each(|c| *c = c.map(|v| n - 1 - v));
         coarse.faces.iter_mut().for_each(|f| f.nodes = f.nodes.map(|v| n - 1 - v));
         for p in 1..=3 {
-            let s = subdivide(&coarse, &equispaced(p));
+            let s = subdivide(&coarse, &equispaced(p)).unwrap();
             assert_eq!(s.fine.nodes.len(), (2 * p + 1).pow(3), "p = {p}");
             assert_eq!(s.fine.faces.len(), 6 * 4 * p * p);
             assert!(crate::hexquality::invalid_hex_cells(&s.fine, &s.fine.nodes).is_empty());
@@ -696,6 +796,46 @@ mod tests {
                     assert!(x.iter().any(|&c| c.abs() < 1e-14 || (c - 1.0).abs() < 1e-14), "{x:?}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn facets_are_checked_oriented_and_must_cover_the_boundary() {
+        let mut coarse = QuadMesh::structured_box([0.0, 0.0], [2.0, 1.0], 2, 1);
+        // flip one boundary edge: it is turned back to the cell's orientation
+        coarse.edges[0].nodes.reverse();
+        let s = subdivide(&coarse, &equispaced(2)).unwrap();
+        let flux: f64 = crate::jacobian::edge_flux_points(&s.fine, &s.fine.nodes, &vec![[1.0, 0.0]; s.fine.nodes.len()]).map(|x| x.1).sum();
+        // a uniform velocity has no net flux through a closed, consistently
+        // oriented boundary
+        assert!(flux.abs() < 1e-14, "net flux {flux}");
+        // a diagonal is no cell edge
+        let mut bad = coarse.clone();
+        bad.edges[0].nodes = [0, 4];
+        assert!(matches!(subdivide(&bad, &equispaced(2)), Err(SubdivideError::NotACellFacet { index: 0, .. })));
+        // a boundary edge left out: its nodes would move freely
+        let mut open = coarse.clone();
+        open.edges.remove(3);
+        let e = subdivide(&open, &equispaced(2)).err().expect("uncovered");
+        assert!(matches!(e, SubdivideError::Uncovered { count: 1, .. }), "{e}");
+        assert!(matches!(subdivide(&coarse, &[0.5]), Err(SubdivideError::TooFewNodes(1))));
+    }
+
+    #[test]
+    fn hex_faces_given_inward_are_turned_outward() {
+        let mut coarse = HexMesh::structured_box([0.0; 3], [1.0; 3], [1, 1, 1]);
+        for f in coarse.faces.iter_mut() {
+            f.nodes.reverse();
+        }
+        let s = subdivide(&coarse, &equispaced(2)).unwrap();
+        // every fine face's normal points away from the centre
+        for f in &s.fine.faces {
+            let p = f.nodes.map(|n| s.fine.nodes[n]);
+            let d1: [f64; 3] = std::array::from_fn(|k| p[2][k] - p[0][k]);
+            let d2: [f64; 3] = std::array::from_fn(|k| p[3][k] - p[1][k]);
+            let n = crate::numeric::cross3(d1, d2);
+            let c: [f64; 3] = std::array::from_fn(|k| p.iter().map(|q| q[k]).sum::<f64>() / 4.0 - 0.5);
+            assert!(n[0] * c[0] + n[1] * c[1] + n[2] * c[2] > 0.0);
         }
     }
 }

@@ -146,6 +146,20 @@ pub fn binary_to_ascii(bytes: &[u8]) -> Result<String, MshError> {
             "$Entities" => entities(&mut r, &mut out)?,
             "$Nodes" => nodes(&mut r, &mut out)?,
             "$Elements" => elements(&mut r, &mut out)?,
+            "$PhysicalNames" | "$MeshFormat" => continue,
+            s if s.starts_with("$End") => continue,
+            s if s.starts_with('$') => {
+                // other sections ($Periodic, $PartitionedEntities, data)
+                // may hold binary data: skip to their end marker, which
+                // the readers skip in any case
+                out.pop();
+                out.truncate(out.rfind('\n').map_or(0, |k| k + 1));
+                let end = format!("$End{}", &s[1..]);
+                let rest = &bytes[r.pos..];
+                let at = rest.windows(end.len()).position(|w| w == end.as_bytes()).ok_or_else(|| MshError::Truncated { line: r.line(), expected: format!("{end} (binary section {s})") })?;
+                r.pos += at + end.len();
+                continue;
+            }
             _ => continue,
         }
         r.skip_newline();
@@ -210,11 +224,11 @@ fn elements(r: &mut Reader, out: &mut String) -> Result<(), MshError> {
     let (total, lo, hi) = (r.size("the number of elements")?, r.size("the minimum element tag")?, r.size("the maximum element tag")?);
     let _ = writeln!(out, "{blocks} {total} {lo} {hi}");
     for _ in 0..blocks {
-        let line = r.line();
         let (dim, tag, ty) = (r.int("an entity dimension")?, r.int("an entity tag")?, r.int("an element type")?);
-        let per = nodes_per_element(ty).ok_or(MshError::UnknownElementType {
-            line,
-            accepted: "in binary files: lines, triangles, quads, tetrahedra, hexahedra, prisms, pyramids of orders 1 to 4, points",
+        // the line is only counted for an error: counting is a scan
+        let per = nodes_per_element(ty).ok_or_else(|| MshError::UnknownElementType {
+            line: r.line(),
+            accepted: "in binary files: points, lines (orders 1-4), quads (orders 1-4), hexahedra (orders 1-4), and linear or quadratic triangles, tetrahedra, prisms and pyramids",
             element_type: ty as i64,
         })?;
         let n = r.count("the number of elements in a block", 8 * (per + 1))?;
