@@ -224,6 +224,18 @@ pub struct HexMesh {
     pub part_names: Vec<String>,
 }
 
+/// The six faces of a hex in local node numbers (Gmsh/VTK order), each
+/// counter-clockwise seen from outside a positively oriented cell:
+/// ζ = 0, ζ = 1, η = 0, ξ = 1, η = 1, ξ = 0.
+pub const HEX_FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
+
 /// The six faces of a structured brick, in the order used for part
 /// indices of a freshly generated brick.
 pub const BOX_FACES: [&str; 6] = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];

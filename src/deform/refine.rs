@@ -217,12 +217,10 @@ pub enum SubdivideError {
 /// The outward facets of a cell in cyclic order: its edges counter-
 /// clockwise (2D) or its faces counter-clockwise seen from outside (3D).
 fn cell_facets<const N: usize>(cell: &[usize; N]) -> Vec<Vec<usize>> {
-    const QUAD: [[usize; 2]; 4] = [[0, 1], [1, 2], [2, 3], [3, 0]];
-    const HEX: [[usize; 4]; 6] = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [0, 4, 7, 3]];
     if N == 4 {
-        QUAD.iter().map(|f| f.iter().map(|&k| cell[k]).collect()).collect()
+        (0..4).map(|k| vec![cell[k], cell[(k + 1) % 4]]).collect()
     } else {
-        HEX.iter().map(|f| f.iter().map(|&k| cell[k]).collect()).collect()
+        crate::mesh::HEX_FACES.iter().map(|f| f.iter().map(|&k| cell[k]).collect()).collect()
     }
 }
 

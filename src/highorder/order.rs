@@ -60,7 +60,7 @@ const GMSH_HEX_FACES: [[usize; 4]; 6] = [
 
 /// The (unit-cube) corners of the linear hex in Gmsh's and VTK's common
 /// order, as 0/1 index triples.
-const HEX_CORNERS: [[usize; 3]; 8] = [
+pub const HEX_CORNERS: [[usize; 3]; 8] = [
     [0, 0, 0],
     [1, 0, 0],
     [1, 1, 0],

@@ -21,6 +21,8 @@ use std::collections::HashMap;
 
 use tiny_skia::{FillRule, LineCap, LineJoin, Mask, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
+use super::check_values;
+use crate::highorder::order::HEX_CORNERS;
 use super::colour::ColourMap;
 use super::hex::raster::{self, distance_to_segment, edge_blend, Canvas, EdgeStyle};
 use super::hex::surface::{surface_faces, HEX_FACES};
@@ -138,15 +140,7 @@ pub fn render_curved_hex(
 /// Checks values against cells and the mesh against what drawing indexes,
 /// so drawing cannot panic or produce garbage.
 fn validate<const D: usize>(mesh: &CurvedMesh<D>, values: &[f64]) -> Result<(), RenderError> {
-    if values.len() != mesh.cells.len() {
-        return Err(RenderError::LengthMismatch {
-            values: values.len(),
-            cells: mesh.cells.len(),
-        });
-    }
-    if let Some(index) = values.iter().position(|v| !v.is_finite()) {
-        return Err(RenderError::NonFiniteValue { index });
-    }
+    check_values(values, mesh.cells.len())?;
     if check_order(mesh.p).is_err() {
         return Err(RenderError::InvalidCurvedMesh {
             reason: format!("element order {} is not in 1..={MAX_ORDER}", mesh.p),
@@ -594,18 +588,6 @@ fn stroke_polylines<'a>(
 // ---------------------------------------------------------------------------
 // 3D
 
-/// Reference corners (0 or 1 per axis) of the hex corners in the local
-/// (Gmsh/VTK) numbering that [`HEX_FACES`] uses.
-const HEX_CORNERS: [[usize; 3]; 8] = [
-    [0, 0, 0],
-    [1, 0, 0],
-    [1, 1, 0],
-    [0, 1, 0],
-    [0, 0, 1],
-    [1, 0, 1],
-    [1, 1, 1],
-    [0, 1, 1],
-];
 
 /// One drawn face: the curved face sampled on an `(m+1) × (m+1)` grid.
 struct Patch {
@@ -676,12 +658,9 @@ impl HexPlan {
         })
     }
 
-    /// The image position (pixels, x right, y down) and depth key (smaller
-    /// is nearer) of world point `p`, or `None` if it is behind the eye.
+    /// The image position of world point `p` (see [`super::hex::to_image`]).
     fn to_image(&self, p: [f64; 3]) -> Option<[f64; 3]> {
-        let [x, y, depth] = self.view.project(p)?;
-        let (px, py) = self.layout.to_px([x, y]);
-        Some([px as f64, py as f64, depth])
+        super::hex::to_image(&self.view, &self.layout, p)
     }
 }
 

@@ -24,6 +24,7 @@ pub(crate) mod view;
 
 use tiny_skia::Pixmap;
 
+use super::check_values;
 use super::colour::ColourMap;
 use super::layout::Layout;
 use super::{canvas, decorate, draw, legend, resolve_range, Legend, RenderError};
@@ -199,27 +200,25 @@ impl Plan3 {
         })
     }
 
-    /// The image position (pixels, x right, y down) and depth key (smaller
-    /// is nearer) of world point `p`, or `None` if it is behind the eye.
+    /// The image position of world point `p` (see [`to_image`]).
     fn to_image(&self, p: [f64; 3]) -> Option<[f64; 3]> {
-        let [x, y, depth] = self.view.project(p)?;
-        let (px, py) = self.layout.to_px([x, y]);
-        Some([px as f64, py as f64, depth])
+        to_image(&self.view, &self.layout, p)
     }
+}
+
+/// The image position (pixels, x right, y down) and depth key (smaller is
+/// nearer) of world point `p` seen by `view` in `layout`, or `None` if it
+/// is behind the eye.
+pub(crate) fn to_image(view: &View, layout: &Layout, p: [f64; 3]) -> Option<[f64; 3]> {
+    let [x, y, depth] = view.project(p)?;
+    let (px, py) = layout.to_px([x, y]);
+    Some([px as f64, py as f64, depth])
 }
 
 /// Checks that values match cells and everything is finite and in range,
 /// so drawing cannot index out of bounds or produce garbage.
 fn validate(mesh: &HexMesh, values: &[f64]) -> Result<(), RenderError> {
-    if values.len() != mesh.cells.len() {
-        return Err(RenderError::LengthMismatch {
-            values: values.len(),
-            cells: mesh.cells.len(),
-        });
-    }
-    if let Some(index) = values.iter().position(|v| !v.is_finite()) {
-        return Err(RenderError::NonFiniteValue { index });
-    }
+    check_values(values, mesh.cells.len())?;
     if let Some(index) = mesh
         .nodes
         .iter()

@@ -296,18 +296,21 @@ impl Plan {
     }
 }
 
-/// Checks that values match cells and everything is finite and in range,
-/// so drawing cannot index out of bounds or produce garbage.
-fn validate(mesh: &QuadMesh, values: &[f64]) -> Result<(), RenderError> {
-    if values.len() != mesh.cells.len() {
-        return Err(RenderError::LengthMismatch {
-            values: values.len(),
-            cells: mesh.cells.len(),
-        });
+/// One finite value per cell: what every renderer's colours need.
+pub(crate) fn check_values(values: &[f64], cells: usize) -> Result<(), RenderError> {
+    if values.len() != cells {
+        return Err(RenderError::LengthMismatch { values: values.len(), cells });
     }
     if let Some(index) = values.iter().position(|v| !v.is_finite()) {
         return Err(RenderError::NonFiniteValue { index });
     }
+    Ok(())
+}
+
+/// Checks that values match cells and everything is finite and in range,
+/// so drawing cannot index out of bounds or produce garbage.
+fn validate(mesh: &QuadMesh, values: &[f64]) -> Result<(), RenderError> {
+    check_values(values, mesh.cells.len())?;
     if let Some(index) = mesh
         .nodes
         .iter()

@@ -2,17 +2,7 @@
 
 use std::collections::HashMap;
 
-/// The six faces of a hex in local node numbers (Gmsh/VTK order), each
-/// counter-clockwise seen from outside a positively oriented cell:
-/// ζ = 0, ζ = 1, η = 0, ξ = 1, η = 1, ξ = 0.
-pub(crate) const HEX_FACES: [[usize; 4]; 6] = [
-    [0, 3, 2, 1],
-    [4, 5, 6, 7],
-    [0, 1, 5, 4],
-    [1, 2, 6, 5],
-    [2, 3, 7, 6],
-    [3, 0, 4, 7],
-];
+pub(crate) use crate::mesh::HEX_FACES;
 
 /// One quad of the drawn surface.
 #[derive(Clone, Debug, PartialEq)]
