@@ -7,7 +7,7 @@
 
 use crate::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
 use crate::deform::refine::Subdividable;
-use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh};
+use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
 use crate::highorder::curve::{curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
 use crate::highorder::Spacing;
 use crate::io::curved::CurvedMesh;
@@ -101,6 +101,8 @@ pub struct Progress {
     pub steps: usize,
     /// Halved steps so far.
     pub halved: usize,
+    /// CG iterations of the last solve (0 for a direct solver).
+    pub iterations: usize,
 }
 
 /// Seconds spent, by phase.
@@ -155,6 +157,8 @@ pub struct Report {
     pub normalisation_c: f64,
     /// Solver used.
     pub solver: String,
+    /// Iterations and times of Algorithm 1's solves.
+    pub solves_detail: SolverReport,
     /// Algorithms 2 and 3, when asked for.
     pub highorder: Option<HighOrderReport>,
     /// Seconds.
@@ -176,6 +180,8 @@ pub struct HighOrderReport {
     pub halved_steps: usize,
     /// Seconds of Algorithm 1 (without outputs), Algorithm 2, certification.
     pub algorithm1_s: f64,
+    /// Algorithm 2's linear solves.
+    pub solver: SolverReport,
     /// Seconds of Algorithm 2 (subdivision and flow).
     pub algorithm2_s: f64,
     /// Seconds of the Bézier certification of every element.
@@ -263,7 +269,7 @@ impl Outputs<2, 4> for QuadMesh {
         render_mesh(&m, values, &opts)
     }
     fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
-        curve_with_progress(self, parts, opts, |t, steps, halved| progress(Progress { algorithm: 2, t, steps, halved }))
+        curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
     }
     fn draw_curved(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
         let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
@@ -297,7 +303,7 @@ impl Outputs<3, 8> for HexMesh {
         render_hex(&m, values, &options3(look))
     }
     fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
-        curve_with_progress(self, parts, opts, |t, steps, halved| progress(Progress { algorithm: 2, t, steps, halved }))
+        curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
     }
     fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
         render_curved_hex(mesh, values, &options3(look))
@@ -353,7 +359,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
             if output.animation && (d.stats.steps % every == 0 || d.t >= 1.0) {
                 anim.push(snapshot(d));
             }
-            progress(Progress { algorithm: 1, t: d.t, steps: d.stats.steps, halved: d.stats.halved });
+            progress(Progress { algorithm: 1, t: d.t, steps: d.stats.steps, halved: d.stats.halved, iterations: d.stats.last_iterations });
         },
     )?;
     let quality = def.mesh.quality();
@@ -444,12 +450,14 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
         boundary_distance_max,
         normalisation_c: norm.c,
         solver: def.solver_name().to_string(),
+        solves_detail: def.solver_report(),
         highorder: curved.as_ref().map(|c| HighOrderReport {
             quality: c.quality.clone(),
             spacing: c.mesh.spacing,
             steps: c.stats.steps,
             halved_steps: c.stats.halved,
             algorithm1_s,
+            solver: c.solver.clone(),
             algorithm2_s: c.seconds.0,
             certify_s: c.seconds.1,
             definitions: "det J of the order-p Lagrange map from the reference [0,1]^d (Gmsh's [-1,1]^d gives 2^-d of it): min_det_j is a certified lower bound from Bezier coefficients with subdivision, min_det_j_attained a value det J takes; scaled Jacobian det J/(product of column norms of J), per element its minimum on a (3p+1)^d grid; boundary distances to the exact shapes of moving (and curved slip) parts, at the nodes and at samples of the curved boundary",
@@ -546,6 +554,8 @@ pub struct CurveReport {
     pub steps: usize,
     /// Halved steps.
     pub halved_steps: usize,
+    /// Algorithm 2's linear solves.
+    pub solver: SolverReport,
     /// Seconds of Algorithm 2 and of the certification.
     pub algorithm2_s: f64,
     /// Seconds of the certification.
@@ -620,6 +630,7 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         spacing: c.mesh.spacing,
         steps: c.stats.steps,
         halved_steps: c.stats.halved,
+        solver: c.solver.clone(),
         algorithm2_s: c.seconds.0,
         certify_s: c.seconds.1,
         total_s: 0.0,

@@ -13,7 +13,7 @@
 //! ([`DivCurlSystem::assemble`]).
 
 use crate::mesh::{colour_cells, Point2};
-use crate::solve::SparsePattern;
+use crate::solve::{Csr, Structure};
 use rayon::prelude::*;
 
 /// The boundary condition of one node: u's components along the columns
@@ -205,17 +205,25 @@ pub fn gauss_points<const D: usize>() -> impl Iterator<Item = ([f64; D], f64)> {
     (0..1usize << D).map(|k| (std::array::from_fn(|d| GAUSS[(k >> d) & 1]), 1.0 / (1 << D) as f64))
 }
 
-/// The assembled reduced system: matrix values on a fixed pattern and the
-/// right-hand side, over the free (rotated) unknowns.
+/// The assembled reduced system: the symmetric matrix over the free
+/// (rotated) unknowns, its right-hand side, and what a multigrid needs to
+/// know of it (node blocks, near-null space).
+///
+/// A node's free unknowns are numbered consecutively, so in the matrix the
+/// columns of one neighbour node form one run in every row of a node.
+/// The pattern records, per cell and pair of its nodes, where that run
+/// starts in the row: assembly adds an element matrix with no search.
 pub struct DivCurlSystem<const D: usize = 2, const N: usize = 4> {
     cells: Vec<[usize; N]>,
     colours: Vec<Vec<usize>>,
     fixed_counts: Vec<usize>,
     /// Free-unknown index of each node's rotated components (NONE if fixed).
     dof: Vec<[u32; D]>,
-    pattern: SparsePattern,
-    /// Matrix values on `pattern`.
-    pub values: Vec<f64>,
+    /// Per cell, N × N offsets: where node b's run starts in node a's rows.
+    offsets: Vec<u32>,
+    matrix: Csr,
+    node_ptr: Vec<u32>,
+    near_null: Vec<f64>,
     /// Right-hand side over the free unknowns.
     pub rhs: Vec<f64>,
     /// Weight of the divergence term.
@@ -226,48 +234,74 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
     /// Numbers the free unknowns and builds the pattern for `constraints`
     /// (only their numbers of prescribed components matter here).
     pub fn new(cells: &[[usize; N]], constraints: &[Constraint<D>]) -> Self {
-        let mut next = 0u32;
-        let dof: Vec<[u32; D]> = constraints
-            .iter()
-            .map(|c| {
-                std::array::from_fn(|k| {
-                    if k < c.fixed {
-                        NONE
-                    } else {
-                        next += 1;
-                        next - 1
-                    }
+        let nodes = constraints.len();
+        let free: Vec<u32> = constraints.iter().map(|c| (D - c.fixed) as u32).collect();
+        let mut first = vec![0u32; nodes + 1];
+        for i in 0..nodes {
+            first[i + 1] = first[i] + free[i];
+        }
+        let n = first[nodes] as usize;
+        let dof: Vec<[u32; D]> =
+            constraints.iter().zip(&first).map(|(c, &f)| std::array::from_fn(|k| if k < c.fixed { NONE } else { f + (k - c.fixed) as u32 })).collect();
+        let neighbours = node_neighbours(cells, &free);
+        let (free_ref, neighbours_ref) = (&free, &neighbours);
+        // the run of neighbour j in node i's rows starts after the runs of
+        // the neighbours numbered below j
+        let run_start = move |i: usize, j: usize| -> u32 {
+            let nb = &neighbours_ref[i];
+            let at = nb.binary_search(&(j as u32)).expect("cell nodes are neighbours");
+            nb[..at].iter().map(|&m| free_ref[m as usize]).sum()
+        };
+        let offsets: Vec<u32> = cells
+            .par_iter()
+            .flat_map_iter(|cell| {
+                (0..N * N).map(move |ab| {
+                    let (i, j) = (cell[ab / N], cell[ab % N]);
+                    if free_ref[i] == 0 || free_ref[j] == 0 { NONE } else { run_start(i, j) }
                 })
             })
             .collect();
-        let pairs = cells.iter().flat_map(|cell| {
-            let l = local_dofs(cell, &dof);
-            (0..D * N * D * N).filter_map(move |k| {
-                let (i, j) = (l[k / (D * N)], l[k % (D * N)]);
-                (i != NONE && j != NONE).then_some((i as usize, j as usize))
-            })
-        });
-        let pattern = SparsePattern::from_pairs(next as usize, pairs);
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut col = Vec::new();
+        row_ptr.push(0);
+        for i in 0..nodes {
+            for _ in 0..free[i] {
+                for &j in &neighbours[i] {
+                    col.extend(first[j as usize]..first[j as usize + 1]);
+                }
+                row_ptr.push(col.len());
+            }
+        }
+        let node_ptr: Vec<u32> = (0..nodes).filter(|&i| free[i] > 0).map(|i| first[i]).chain([n as u32]).collect();
+        let matrix = Csr { nrows: n, ncols: n, val: vec![0.0; col.len()], row_ptr, col };
         DivCurlSystem {
             cells: cells.to_vec(),
-            colours: colour_cells(cells, constraints.len()),
+            colours: colour_cells(cells, nodes),
             fixed_counts: constraints.iter().map(|c| c.fixed).collect(),
             dof,
-            values: vec![0.0; pattern.nnz()],
-            rhs: vec![0.0; pattern.n],
-            pattern,
+            offsets,
+            matrix,
+            node_ptr,
+            near_null: vec![0.0; D * n],
+            rhs: vec![0.0; n],
             div_weight: 1.0,
         }
     }
 
-    /// The sparsity pattern (lower triangle) of the reduced matrix.
-    pub fn pattern(&self) -> &SparsePattern {
-        &self.pattern
+    /// The assembled matrix (both triangles).
+    pub fn matrix(&self) -> &Csr {
+        &self.matrix
+    }
+
+    /// Node blocks and near-null space (the D translations in the nodes'
+    /// frames) of the last assembly, for an algebraic multigrid.
+    pub fn structure(&self) -> Structure<'_> {
+        Structure { node_ptr: &self.node_ptr, near_null: &self.near_null, count: D }
     }
 
     /// Number of free unknowns.
     pub fn num_unknowns(&self) -> usize {
-        self.pattern.n
+        self.matrix.nrows
     }
 
     /// Fills matrix and right-hand side for nodes at `nodes`, constraints
@@ -280,27 +314,45 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
         if let Some(node) = (0..constraints.len()).find(|&i| constraints[i].fixed != self.fixed_counts[i]) {
             return Err(LsfemError::KindChanged { node });
         }
-        self.values.iter_mut().for_each(|v| *v = 0.0);
+        self.fill_near_null(constraints);
+        self.matrix.val.par_iter_mut().for_each(|v| *v = 0.0);
         self.rhs.iter_mut().for_each(|v| *v = 0.0);
-        let values = SyncPtr(self.values.as_mut_ptr());
+        let values = SyncPtr(self.matrix.val.as_mut_ptr());
         let rhs = SyncPtr(self.rhs.as_mut_ptr());
-        let (cells, dof, pattern, w) = (&self.cells, &self.dof, &self.pattern, self.div_weight);
+        let (cells, dof, w) = (&self.cells, &self.dof, self.div_weight);
+        let (row_ptr, offsets) = (&self.matrix.row_ptr, &self.offsets);
         for group in &self.colours {
             group.par_iter().try_for_each(|&c| {
                 let cell = &cells[c];
                 let p = cell.map(|n| nodes[n]);
                 let cons = cell.map(|n| constraints[n]);
                 let (k, f) = element(c, &p, &cons, w, &g)?;
-                // Cells of one colour share no node, hence no matrix entry
+                let at = Scatter { rows: cell.map(|n| dof[n]), row_ptr, offsets: &offsets[c * N * N..(c + 1) * N * N] };
+                // Cells of one colour share no node, hence no matrix row
                 // and no rhs entry: these writes never race.
-                scatter(&k, &f, &local_dofs(cell, dof), &cons, pattern, &values, &rhs);
+                at.add(&k, &f, &cons, &values, &rhs);
                 Ok::<(), LsfemError>(())
             })?;
         }
         Ok(())
     }
 
-    /// Nodal u from the solution `x` of the reduced system: free
+    /// The translations in each node's frame: unknown k of a node is u's
+    /// component along its frame's k-th direction, so translation e_d has
+    /// there the value frame[k][d].
+    fn fill_near_null(&mut self, constraints: &[Constraint<D>]) {
+        let n = self.matrix.nrows;
+        for (c, dofs) in constraints.iter().zip(&self.dof) {
+            for k in c.fixed..D {
+                let i = dofs[k] as usize;
+                for d in 0..D {
+                    self.near_null[d * n + i] = c.frame[k][d];
+                }
+            }
+        }
+    }
+
+/// Nodal u from the solution `x` of the reduced system: free
     /// components from `x`, prescribed ones from `constraints`, rotated
     /// back to Cartesian components.
     pub fn expand(&self, x: &[f64], constraints: &[Constraint<D>], out: &mut [[f64; D]]) {
@@ -315,17 +367,6 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
             out[node] = u;
         }
     }
-}
-
-/// Global free-unknown numbers of a cell's local unknowns (node-major).
-fn local_dofs<const D: usize, const N: usize>(cell: &[usize; N], dof: &[[u32; D]]) -> [u32; MAX_LOCAL] {
-    let mut l = [NONE; MAX_LOCAL];
-    for a in 0..N {
-        for k in 0..D {
-            l[D * a + k] = dof[cell[a]][k];
-        }
-    }
-    l
 }
 
 #[derive(Clone, Copy)]
@@ -397,44 +438,81 @@ fn element<const D: usize, const N: usize, G: Fn([f64; D]) -> f64>(
     Ok((k, f))
 }
 
-fn scatter<const D: usize, const N: usize>(
-    k: &[f64; MAX_LOCAL * MAX_LOCAL],
-    f: &[f64; MAX_LOCAL],
-    l: &[u32; MAX_LOCAL],
-    cons: &[Constraint<D>; N],
-    pattern: &SparsePattern,
-    values: &SyncPtr,
-    rhs: &SyncPtr,
-) {
-    let nd = D * N;
-    let fixed = |j: usize| {
-        let c = &cons[j / D];
-        (j % D < c.fixed).then(|| c.values[j % D])
-    };
-    for i in 0..nd {
-        let gi = l[i];
-        if gi == NONE {
-            continue;
-        }
-        // move the prescribed columns to the right-hand side
-        let mut fi = f[i];
-        for j in 0..nd {
-            if let Some(v) = fixed(j) {
-                fi -= k[nd * i + j] * v;
-            }
-        }
-        // SAFETY: colour-disjoint cells, see `assemble`.
-        unsafe {
-            *rhs.0.add(gi as usize) += fi;
-            for j in 0..nd {
-                let gj = l[j];
-                if gj != NONE && gi >= gj {
-                    let pos = pattern.position(gi as usize, gj as usize).expect("entry in the pattern");
-                    *values.0.add(pos) += k[nd * i + j];
+/// Where one cell's element matrix goes: the free-unknown numbers of its
+/// nodes, and the runs of its node pairs in the matrix rows.
+struct Scatter<'a, const D: usize, const N: usize> {
+    rows: [[u32; D]; N],
+    row_ptr: &'a [usize],
+    offsets: &'a [u32],
+}
+
+impl<const D: usize, const N: usize> Scatter<'_, D, N> {
+    /// Adds the element matrix and vector (prescribed columns moved to the
+    /// right-hand side).
+    fn add(&self, k: &[f64; MAX_LOCAL * MAX_LOCAL], f: &[f64; MAX_LOCAL], cons: &[Constraint<D>; N], values: &SyncPtr, rhs: &SyncPtr) {
+        let nd = D * N;
+        for a in 0..N {
+            for ka in cons[a].fixed..D {
+                let i = D * a + ka;
+                let gi = self.rows[a][ka] as usize;
+                let mut fi = f[i];
+                for (b, cb) in cons.iter().enumerate() {
+                    for kb in 0..cb.fixed {
+                        fi -= k[nd * i + D * b + kb] * cb.values[kb];
+                    }
+                }
+                // SAFETY: colour-disjoint cells, see `assemble`.
+                unsafe {
+                    *rhs.0.add(gi) += fi;
+                    for (b, cb) in cons.iter().enumerate() {
+                        if cb.fixed == D {
+                            continue;
+                        }
+                        let run = self.row_ptr[gi] + self.offsets[a * N + b] as usize;
+                        for kb in cb.fixed..D {
+                            *values.0.add(run + kb - cb.fixed) += k[nd * i + D * b + kb];
+                        }
+                    }
                 }
             }
         }
     }
+}
+
+/// Each node's neighbours (nodes sharing a cell, itself included) that
+/// have free unknowns, sorted; empty for a node without any.
+fn node_neighbours<const N: usize>(cells: &[[usize; N]], free: &[u32]) -> Vec<Vec<u32>> {
+    let nodes = free.len();
+    let mut ptr = vec![0usize; nodes + 1];
+    for cell in cells {
+        for &v in cell {
+            ptr[v + 1] += 1;
+        }
+    }
+    for i in 0..nodes {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut of = vec![0u32; ptr[nodes]];
+    for (c, cell) in cells.iter().enumerate() {
+        for &v in cell {
+            of[fill[v]] = c as u32;
+            fill[v] += 1;
+        }
+    }
+    (0..nodes)
+        .into_par_iter()
+        .map(|i| {
+            if free[i] == 0 {
+                return Vec::new();
+            }
+            let mut nb: Vec<u32> =
+                of[ptr[i]..ptr[i + 1]].iter().flat_map(|&c| cells[c as usize]).filter(|&j| free[j] > 0).map(|j| j as u32).collect();
+            nb.sort_unstable();
+            nb.dedup();
+            nb
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -471,10 +549,10 @@ mod tests {
         let mut sys = DivCurlSystem::<2, 4>::new(&mesh.cells, &cons);
         sys.assemble(&mesh.nodes, &cons, |x| -3.0 * (2.0 * x[0]).sin() * x[1].exp()).unwrap();
         let mut solver = CholeskySolver::new();
-        solver.analyze(sys.pattern()).unwrap();
-        solver.factor(&sys.values).unwrap();
+        solver.analyze(sys.matrix()).unwrap();
+        solver.factor(sys.matrix(), sys.structure()).unwrap();
         let mut x = sys.rhs.clone();
-        solver.solve_in_place(&mut x).unwrap();
+        solver.solve_in_place(sys.matrix(), &mut x).unwrap();
         let mut u = vec![[0.0; 2]; mesh.num_nodes()];
         sys.expand(&x, &cons, &mut u);
         u.iter()
@@ -507,10 +585,10 @@ mod tests {
         let mut sys = DivCurlSystem::<2, 4>::new(&mesh.cells, &cons);
         sys.assemble(&mesh.nodes, &cons, |_| 2.0).unwrap();
         let mut solver = CholeskySolver::new();
-        solver.analyze(sys.pattern()).unwrap();
-        solver.factor(&sys.values).unwrap();
+        solver.analyze(sys.matrix()).unwrap();
+        solver.factor(sys.matrix(), sys.structure()).unwrap();
         let mut x = sys.rhs.clone();
-        solver.solve_in_place(&mut x).unwrap();
+        solver.solve_in_place(sys.matrix(), &mut x).unwrap();
         let mut u = vec![[0.0; 2]; mesh.num_nodes()];
         sys.expand(&x, &cons, &mut u);
         for (u, p) in u.iter().zip(&mesh.nodes) {
@@ -569,10 +647,10 @@ mod tests {
         let mut sys = DivCurlSystem::<3, 8>::new(&mesh.cells, &cons);
         sys.assemble(&mesh.nodes, &cons, |x| -4.0 * (2.0 * x[0]).sin() * x[1].exp() * x[2].cos()).unwrap();
         let mut solver = CholeskySolver::new();
-        solver.analyze(sys.pattern()).unwrap();
-        solver.factor(&sys.values).unwrap();
+        solver.analyze(sys.matrix()).unwrap();
+        solver.factor(sys.matrix(), sys.structure()).unwrap();
         let mut x = sys.rhs.clone();
-        solver.solve_in_place(&mut x).unwrap();
+        solver.solve_in_place(sys.matrix(), &mut x).unwrap();
         let mut u = vec![[0.0; 3]; mesh.num_nodes()];
         sys.expand(&x, &cons, &mut u);
         u.iter()

@@ -81,7 +81,7 @@ enum Command {
         /// 2: the quarter disk on n² quads; 3: the quarter ball on n³ hexes.
         #[arg(long, default_value_t = 2)]
         dim: usize,
-        /// auto, cholesky or cg.
+        /// auto, cholesky, cg or amg.
         #[arg(long, default_value = "auto")]
         solver: String,
     },
@@ -164,25 +164,27 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Bench { sizes, repeat, dim, solver } => {
             let solver: SolverChoice = serde_json::from_value(serde_json::Value::String(solver.clone()))
-                .map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky or cg, got `{solver}`"))?;
+                .map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cg or amg, got `{solver}`"))?;
             anyhow::ensure!(dim == 2 || dim == 3, "--dim must be 2 or 3, got {dim}");
             println!(
-                "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>13} {:>11} {:>12}",
-                "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "us/unknown", "analyse_s", "peak_MiB"
+                "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>6} {:>12} {:>11} {:>11} {:>10}",
+                "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "iters", "us/unknown", "first_s", "setup_s", "peak_MiB"
             );
             for n in sizes {
                 let b = if dim == 2 { deformesh::bench::one_step(n, repeat, solver) } else { deformesh::bench::one_step_3d(n, repeat, solver) };
                 let b = b.map_err(|e| anyhow::anyhow!(e))?;
                 println!(
-                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>13.3} {:>11.4} {:>12}",
+                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>6} {:>12.3} {:>11.4} {:>11.4} {:>10}",
                     format!("{n}{}", if dim == 2 { "²" } else { "³" }),
                     b.unknowns,
                     b.assemble_s,
                     b.factor_s,
                     b.solve_s,
                     b.step_s(),
+                    b.iterations,
                     1e6 * b.step_s() / b.unknowns as f64,
-                    b.analyze_s,
+                    b.first_step_s,
+                    b.setup_s,
                     deformesh::bench::peak_memory_mib().map_or("n/a".to_string(), |m| format!("{m:.0}"))
                 );
             }
@@ -242,14 +244,14 @@ impl Bar {
         match &self.bar {
             Some(b) => {
                 b.set_position((p.t * 1000.0) as u64);
-                b.set_message(format!("{:.3}  algorithm {}  steps {}  halved {}", p.t, p.algorithm, p.steps, p.halved));
+                b.set_message(format!("{:.3}  algorithm {}  steps {}  halved {}  CG iterations {}", p.t, p.algorithm, p.steps, p.halved, p.iterations));
             }
             None => {
                 // deciles of each algorithm in turn: algorithm 2 starts again at t = 0
                 let decile = 100 * p.algorithm as i64 + (p.t * 10.0 + 1e-9).floor() as i64;
                 if decile > self.last.get() {
                     self.last.set(decile);
-                    eprintln!("algorithm {}: t = {:.3}  steps {}  halved {}", p.algorithm, p.t, p.steps, p.halved);
+                    eprintln!("algorithm {}: t = {:.3}  steps {}  halved {}  CG iterations {}", p.algorithm, p.t, p.steps, p.halved, p.iterations);
                 }
             }
         }

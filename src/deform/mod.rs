@@ -26,7 +26,7 @@ pub mod refine;
 
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
-use crate::solve::{CholeskySolver, ConjugateGradient, SolveError, SpdSolver};
+use crate::solve::{Amg, CholeskySolver, ConjugateGradient, Jacobi, SolveError, SpdSolver};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -252,27 +252,79 @@ pub struct RunStats {
     pub solve: Duration,
     /// Time in the symbolic analysis (once).
     pub analyze: Duration,
+    /// Iterations of all solves (0 for a direct solver).
+    pub iterations: usize,
+    /// Iterations of the last solve.
+    pub last_iterations: usize,
+    /// Most iterations of one solve.
+    pub max_iterations: usize,
+    /// Preconditioner hierarchies built (multigrid).
+    pub setups: usize,
+    /// Time building them (part of `factor`).
+    pub setup: Duration,
+}
+
+/// What the linear solves of a run cost, for `report.json`.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SolverReport {
+    /// The solver.
+    pub solver: String,
+    /// Free unknowns of the system.
+    pub unknowns: usize,
+    /// Solves.
+    pub solves: usize,
+    /// Mean CG iterations per solve (0 for Cholesky).
+    pub iterations_mean: f64,
+    /// Most CG iterations of one solve.
+    pub iterations_max: usize,
+    /// Multigrid hierarchies built (once, then again when the iterations grew).
+    pub hierarchy_builds: usize,
+    /// Seconds building them.
+    pub setup_s: f64,
+    /// Seconds in factorisation or preconditioner refresh, set-up included.
+    pub factor_s: f64,
+    /// Seconds in the solves.
+    pub solve_s: f64,
 }
 
 /// Which sparse solver Algorithm 1 uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverChoice {
-    /// Cholesky, except in 3D above [`AUTO_CG_UNKNOWNS`] unknowns, where
-    /// conjugate gradients.
+    /// Cholesky up to [`AUTO_AMG_UNKNOWNS`] unknowns (in its dimension),
+    /// multigrid-preconditioned CG above.
     #[default]
     Auto,
     /// Sparse Cholesky (faer): exact, but its fill grows fast in 3D.
     Cholesky,
     /// Jacobi-preconditioned conjugate gradients, warm-started.
     Cg,
+    /// Conjugate gradients preconditioned by smoothed-aggregation
+    /// multigrid, warm-started: iterations nearly independent of the size.
+    Amg,
 }
 
-/// Above this many unknowns in 3D `auto` chooses conjugate gradients:
-/// measured on the quarter ball, a Cholesky step takes 25 s and 2.1 GB at
-/// 10⁵ unknowns and 313 s and 12.5 GB at 3.4·10⁵ (CG: 1.2 s and 5.4 s). In
-/// 2D Cholesky stays ahead (6 s against 45 s at 1.3·10⁶ unknowns).
-pub const AUTO_CG_UNKNOWNS: usize = 150_000;
+/// Above these many unknowns `auto` chooses multigrid-preconditioned CG
+/// over Cholesky, in 2D and in 3D (measured with `deformesh bench`, see
+/// the README: where the two step times cross).
+pub const AUTO_AMG_UNKNOWNS: [usize; 2] = [200_000, 20_000];
+
+impl SolverChoice {
+    /// The solver this choice makes for a `dim`-D system of `unknowns`.
+    pub fn make(self, dim: usize, unknowns: usize) -> Box<dyn SpdSolver> {
+        let large = unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)];
+        match self {
+            SolverChoice::Cholesky => Box::new(CholeskySolver::new()),
+            SolverChoice::Auto if !large => Box::new(CholeskySolver::new()),
+            SolverChoice::Cg => Box::new(ConjugateGradient::new(Jacobi::default())),
+            SolverChoice::Auto | SolverChoice::Amg => {
+                let mut cg = ConjugateGradient::new(Amg::default());
+                cg.max_iterations = 1000;
+                Box::new(cg)
+            }
+        }
+    }
+}
 
 /// Options of Algorithm 1.
 #[derive(Clone, Debug)]
@@ -333,12 +385,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// part can reach its target, builds the pattern and analyses it.
     pub fn new(mesh: M, parts: Vec<BoundaryPart<D>>, field: JacobianField, options: DeformOptions) -> Result<Self, DeformError> {
         // D unknowns per node bound the system size from above
-        let cg = match options.solver {
-            SolverChoice::Auto => D == 3 && D * mesh.nodes().len() > AUTO_CG_UNKNOWNS,
-            SolverChoice::Cholesky => false,
-            SolverChoice::Cg => true,
-        };
-        let solver: Box<dyn SpdSolver> = if cg { Box::new(ConjugateGradient::default()) } else { Box::new(CholeskySolver::new()) };
+        let solver = options.solver.make(D, D * mesh.nodes().len());
         Self::with_solver(mesh, parts, field, options, solver)
     }
 
@@ -362,7 +409,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         let mut system = DivCurlSystem::new(mesh.cells(), &constraints);
         system.div_weight = options.div_weight;
         let t0 = Instant::now();
-        solver.analyze(system.pattern())?;
+        solver.analyze(system.matrix())?;
         let stats = RunStats { analyze: t0.elapsed(), ..Default::default() };
         Ok(Deformation {
             start: mesh.nodes().to_vec(),
@@ -428,6 +475,22 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// The solver in use.
     pub fn solver_name(&self) -> &'static str {
         self.solver.name()
+    }
+
+    /// What the solves have cost so far.
+    pub fn solver_report(&self) -> SolverReport {
+        let s = &self.stats;
+        SolverReport {
+            solver: self.solver.name().to_string(),
+            unknowns: self.num_unknowns(),
+            solves: s.solves,
+            iterations_mean: s.iterations as f64 / s.solves.max(1) as f64,
+            iterations_max: s.max_iterations,
+            hierarchy_builds: s.setups,
+            setup_s: s.setup.as_secs_f64(),
+            factor_s: s.factor.as_secs_f64(),
+            solve_s: s.solve.as_secs_f64(),
+        }
     }
 
     /// Runs from the current t to 1 with the nominal step 1/steps, landing
@@ -558,13 +621,21 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             })?;
         self.stats.assembly += t0.elapsed();
         let t1 = Instant::now();
-        self.solver.factor(&self.system.values).map_err(DeformError::from)?;
+        self.solver.factor(self.system.matrix(), self.system.structure()).map_err(DeformError::from)?;
         let t2 = Instant::now();
         self.x.copy_from_slice(&self.system.rhs);
-        self.solver.solve_in_place(&mut self.x).map_err(DeformError::from)?;
+        self.solver.solve_in_place(self.system.matrix(), &mut self.x).map_err(DeformError::from)?;
         self.stats.factor += t2 - t1;
         self.stats.solve += t2.elapsed();
         self.stats.solves += 1;
+        let info = self.solver.info();
+        self.stats.iterations += info.iterations;
+        self.stats.last_iterations = info.iterations;
+        self.stats.max_iterations = self.stats.max_iterations.max(info.iterations);
+        if info.rebuilt {
+            self.stats.setups += 1;
+            self.stats.setup += info.setup;
+        }
         self.system.expand(&self.x, &self.constraints, &mut self.u);
         for (u, f) in self.u.iter_mut().zip(&self.f_nodes) {
             *u = u.map(|c| f * c);

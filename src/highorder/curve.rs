@@ -17,10 +17,6 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
 
-/// Above this many unknowns a 3D Algorithm 2 with `solver = auto` uses
-/// conjugate gradients.
-pub const ALG2_CG_UNKNOWNS: usize = 20_000;
-
 /// Options of Algorithms 2 and 3.
 #[derive(Clone, Debug)]
 pub struct CurveOptions {
@@ -102,6 +98,8 @@ pub struct Curved<const D: usize> {
     pub quality: CurvedQuality,
     /// Counters and timings of Algorithm 2.
     pub stats: RunStats,
+    /// Its linear solves.
+    pub solver: crate::deform::SolverReport,
     /// Seconds spent in Algorithm 2, in certification.
     pub seconds: (f64, f64),
 }
@@ -145,16 +143,16 @@ where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
 {
-    curve_with_progress(coarse, parts, opts, |_, _, _| {})
+    curve_with_progress(coarse, parts, opts, |_, _| {})
 }
 
-/// [`curve`], calling `progress(t, steps, halved)` after every accepted
+/// [`curve`], calling `progress(t, stats)` after every accepted
 /// step of Algorithm 2.
 pub fn curve_with_progress<M, const D: usize, const N: usize>(
     coarse: &M,
     parts: &[BoundaryPart<D>],
     opts: &CurveOptions,
-    mut progress: impl FnMut(f64, usize, usize),
+    mut progress: impl FnMut(f64, &RunStats),
 ) -> Result<Curved<D>, CurveError>
 where
     M: Subdividable<D, N>,
@@ -168,14 +166,9 @@ where
     let p = opts.order;
     let clock = Instant::now();
     let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?)?;
-    let mut flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
-    // Algorithm 2 moves nodes a little from the previous step's solution:
-    // warm-started CG needs few iterations, while a 3D Cholesky's fill
-    // grows fast (measured on the quarter ball, p = 2 at 16³, 1.1e5
-    // unknowns: Cholesky 132 s and 2.1 GB for 10 steps)
-    if D == 3 && flow.solver == crate::deform::SolverChoice::Auto && D * sub.fine.nodes().len() > ALG2_CG_UNKNOWNS {
-        flow.solver = crate::deform::SolverChoice::Cg;
-    }
+    // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
+    // a few thousand nodes, as for Algorithm 1
+    let flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
     let mut parts2 = refine_parts(parts);
     if opts.dirichlet {
         for part in parts2.iter_mut() {
@@ -185,7 +178,7 @@ where
         }
     }
     let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
-    def.run(&[], |_| {}, |d| progress(d.t, d.stats.steps, d.stats.halved))?;
+    def.run(&[], |_| {}, |d| progress(d.t, &d.stats))?;
     let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
     let alg2 = clock.elapsed().as_secs_f64();
     let mesh = CurvedMesh {
@@ -202,7 +195,7 @@ where
     // they were not moved, so only this shows a vertex off its shape
     quality.boundary_node_distance = moved_distance.max(node_distance(&mesh, &parts2));
     quality.boundary_sample_distance = sampled_distance(&mesh, &parts2, opts.samples)?;
-    Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), seconds: (alg2, clock.elapsed().as_secs_f64()) })
+    Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), solver: def.solver_report(), seconds: (alg2, clock.elapsed().as_secs_f64()) })
 }
 
 /// The largest distance of a node of a boundary element of a moving (or

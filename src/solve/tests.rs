@@ -1,0 +1,205 @@
+//! Solver tests on matrices with known answers; the LSFEM systems are
+//! tested through the deformation (tests/ and `deform`).
+
+use super::*;
+
+/// The 5-point Laplacian plus `shift` on an m×m grid, as CSR.
+fn laplacian(m: usize, shift: f64) -> Csr {
+    let id = |i: usize, j: usize| j * m + i;
+    let mut pairs = Vec::new();
+    for j in 0..m {
+        for i in 0..m {
+            if i + 1 < m {
+                pairs.push((id(i + 1, j), id(i, j)));
+            }
+            if j + 1 < m {
+                pairs.push((id(i, j + 1), id(i, j)));
+            }
+        }
+    }
+    let mut a = Csr::symmetric_from_pairs(m * m, pairs);
+    for i in 0..m * m {
+        for k in a.row_ptr[i]..a.row_ptr[i + 1] {
+            a.val[k] = if a.col[k] as usize == i { 4.0 + shift } else { -1.0 };
+        }
+    }
+    a
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+fn solve_with(solver: &mut dyn SpdSolver, a: &Csr, b: &[f64], structure: Structure<'_>) -> Vec<f64> {
+    solver.analyze(a).unwrap();
+    solver.factor(a, structure).unwrap();
+    let mut x = b.to_vec();
+    solver.solve_in_place(a, &mut x).unwrap();
+    x
+}
+
+#[test]
+fn cholesky_solves_and_refactors() {
+    let n = 50;
+    let mut a = Csr::symmetric_from_pairs(n, (0..n - 1).map(|i| (i + 1, i)));
+    let (ptr, null) = scalar_structure(n);
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let mut solver = CholeskySolver::new();
+    solver.analyze(&a).unwrap();
+    for shift in [1.0, 3.0] {
+        for i in 0..n {
+            for k in a.row_ptr[i]..a.row_ptr[i + 1] {
+                a.val[k] = if a.col[k] as usize == i { 2.0 + shift } else { -1.0 };
+            }
+        }
+        solver.factor(&a, s).unwrap();
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).sin()).collect();
+        let mut b = vec![0.0; n];
+        a.apply(&x, &mut b);
+        solver.solve_in_place(&a, &mut b).unwrap();
+        assert!(max_diff(&b, &x) < 1e-12, "error {}", max_diff(&b, &x));
+    }
+}
+
+#[test]
+fn jacobi_and_multigrid_cg_agree_with_cholesky() {
+    // the Laplacian without shift: condition ~ m², the case where plain
+    // Jacobi-CG needs many iterations and multigrid should not
+    for m in [80, 240] {
+        let a = laplacian(m, 0.0);
+        let n = m * m;
+        let (ptr, null) = scalar_structure(n);
+        let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+        let b: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
+        let exact = solve_with(&mut CholeskySolver::new(), &a, &b, s);
+        let mut jac = ConjugateGradient::new(Jacobi::default());
+        jac.tolerance = 1e-12;
+        let xj = solve_with(&mut jac, &a, &b, s);
+        let mut amg = ConjugateGradient::new(Amg::default());
+        amg.tolerance = 1e-12;
+        let xa = solve_with(&mut amg, &a, &b, s);
+        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(max_diff(&xj, &exact) < 1e-8 * scale, "Jacobi error {}", max_diff(&xj, &exact));
+        assert!(max_diff(&xa, &exact) < 1e-8 * scale, "AMG error {}", max_diff(&xa, &exact));
+        // measured (tolerance 1e-12): Jacobi 276 and 703, AMG 12 and 12
+        let (ij, ia) = (jac.last_iterations(), amg.last_iterations());
+        assert!(ia <= 14 && ij > 20 * ia, "m = {m}: Jacobi {ij}, AMG {ia} iterations");
+        // a warm start from the answer needs (almost) no iterations
+        let mut again = b.clone();
+        amg.solve_in_place(&a, &mut again).unwrap();
+        assert!(amg.last_iterations() <= 1, "{} iterations from the answer", amg.last_iterations());
+    }
+}
+
+#[test]
+fn multigrid_coarsens_and_keeps_its_hierarchy() {
+    let m = 200;
+    let mut a = laplacian(m, 0.0);
+    let n = m * m;
+    let (ptr, null) = scalar_structure(n);
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let mut amg = Amg::default();
+    assert!(amg.setup(&a, s).unwrap(), "the first set-up builds");
+    let sizes = amg.level_sizes();
+    // 3×3 aggregates of a 5-point stencil: each level about 1/5–1/9 the size
+    assert!(sizes.len() >= 3 && sizes.windows(2).all(|w| w[1] * 4 < w[0]), "levels {sizes:?}");
+    assert!(*sizes.last().unwrap() <= AmgOptions::default().coarse_size);
+    let oc = amg.operator_complexity(&a);
+    assert!(oc > 1.05 && oc < 1.6, "operator complexity {oc}");
+    // new values, same pattern: refreshed, not rebuilt, until told
+    a.val.iter_mut().for_each(|v| *v *= 1.5);
+    assert!(!amg.setup(&a, s).unwrap());
+    amg.observe(10);
+    amg.observe(40);
+    assert!(amg.setup(&a, s).unwrap(), "a solve of 40 after 10 iterations rebuilds");
+}
+
+#[test]
+fn near_null_space_of_rotated_frames_keeps_iterations_low() {
+    // two unknowns per node: a vector Laplacian in a random rotated frame
+    // per node, u ↦ Σ (u_i − u_j)² over grid edges (plus nothing): its
+    // null space is the constant vectors *in Cartesian components*
+    let m = 60;
+    let nodes = m * m;
+    let n = 2 * nodes;
+    let angle = |k: usize| ((k * 2654435761) % 1000) as f64 * 0.00628;
+    let frame = |k: usize| {
+        let (s, c) = angle(k).sin_cos();
+        [[c, s], [-s, c]]
+    };
+    let id = |i: usize, j: usize| j * m + i;
+    let mut edges = Vec::new();
+    for j in 0..m {
+        for i in 0..m {
+            if i + 1 < m {
+                edges.push((id(i, j), id(i + 1, j)));
+            }
+            if j + 1 < m {
+                edges.push((id(i, j), id(i, j + 1)));
+            }
+        }
+    }
+    let pairs = edges.iter().flat_map(|&(p, q)| (0..4).map(move |k| (2 * p + k / 2, 2 * q + k % 2))).chain((0..nodes).map(|p| (2 * p + 1, 2 * p)));
+    let mut a = Csr::symmetric_from_pairs(n, pairs);
+    let add = |a: &mut Csr, i: usize, j: usize, v: f64| {
+        let k = a.position(i, j).unwrap();
+        a.val[k] += v;
+    };
+    // edge term (u_p − u_q)ᵀ(u_p − u_q) with u_p = F_pᵀ x_p
+    for &(p, q) in &edges {
+        let (fp, fq) = (frame(p), frame(q));
+        for k in 0..2 {
+            for l in 0..2 {
+                let pp: f64 = (0..2).map(|d| fp[k][d] * fp[l][d]).sum();
+                let qq: f64 = (0..2).map(|d| fq[k][d] * fq[l][d]).sum();
+                let pq: f64 = (0..2).map(|d| fp[k][d] * fq[l][d]).sum();
+                add(&mut a, 2 * p + k, 2 * p + l, pp);
+                add(&mut a, 2 * q + k, 2 * q + l, qq);
+                add(&mut a, 2 * p + k, 2 * q + l, -pq);
+                add(&mut a, 2 * q + l, 2 * p + k, -pq);
+            }
+        }
+    }
+    // pin the first row of nodes (Dirichlet-like, keeps A definite)
+    for i in 0..m {
+        for k in 0..2 {
+            add(&mut a, 2 * i + k, 2 * i + k, 1.0);
+        }
+    }
+    let ptr: Vec<u32> = (0..=nodes as u32).map(|k| 2 * k).collect();
+    let mut rotated = vec![0.0; 2 * n];
+    for p in 0..nodes {
+        for k in 0..2 {
+            for d in 0..2 {
+                rotated[d * n + 2 * p + k] = frame(p)[k][d];
+            }
+        }
+    }
+    let constants: Vec<f64> = (0..2 * n).map(|i| if (i % n) % 2 == i / n { 1.0 } else { 0.0 }).collect();
+    let b: Vec<f64> = (0..n).map(|i| ((i * 11) % 7) as f64 - 3.0).collect();
+    let mut iterations = Vec::new();
+    for null in [&rotated, &constants] {
+        let mut cg = ConjugateGradient::new(Amg::default());
+        let _ = solve_with(&mut cg, &a, &b, Structure { node_ptr: &ptr, near_null: null, count: 2 });
+        iterations.push(cg.last_iterations());
+    }
+    // measured: 8 with the rotated translations, 87 with plain constants
+    assert!(iterations[0] <= 10 && iterations[1] > 5 * iterations[0], "{iterations:?}");
+}
+
+#[test]
+fn indefinite_matrix_and_bad_structure_are_errors() {
+    let mut a = Csr::symmetric_from_pairs(2, [(1, 0)]);
+    a.val.copy_from_slice(&[1.0, 2.0, 2.0, -1.0]);
+    let (ptr, null) = scalar_structure(2);
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let mut c = CholeskySolver::new();
+    c.analyze(&a).unwrap();
+    assert!(matches!(c.factor(&a, s), Err(SolveError::NotPositiveDefinite)));
+    assert!(matches!(CholeskySolver::new().factor(&a, s), Err(SolveError::Order(_))));
+    let mut j = ConjugateGradient::new(Jacobi::default());
+    j.analyze(&a).unwrap();
+    assert!(matches!(j.factor(&a, s), Err(SolveError::NotPositiveDefinite)));
+    let bad = Structure { node_ptr: &[0, 1], near_null: &null, count: 1 };
+    assert!(matches!(Amg::default().setup(&a, bad), Err(SolveError::Pattern(_))));
+}
