@@ -11,6 +11,7 @@
 #   DEFORMESH   binary (default target/release/deformesh)
 #   PYTHON      Python with the gmsh module (default .venv/bin/python if present, else python3)
 #   GMSH_TIMEOUT  per-run limit of a Gmsh run in seconds (default 600)
+#   GMSH_MAX_MEM_GB  per-run address-space cap of a Gmsh run (default 16; 0 = none)
 #   CASES       space-separated subset of the case names below
 #
 # The meshes (benches/curving_meshes.py) go to target/curving-bench/ if absent;
@@ -38,6 +39,7 @@ if [[ -z "${PYTHON:-}" ]]; then
     if [[ -x .venv/bin/python ]]; then PYTHON=.venv/bin/python; else PYTHON=python3; fi
 fi
 GMSH_TIMEOUT=${GMSH_TIMEOUT:-600}
+GMSH_MAX_MEM_GB=${GMSH_MAX_MEM_GB:-16}
 ORDER=3
 DIR=target/curving-bench
 OUT=$DIR/out
@@ -107,12 +109,12 @@ f = lambda v, s: "-" if v is None else format(v, s)
 note = r.get("note")
 print(f"{r['mesh']:<18} {'gmsh ' + r['method']:<18} {f(r.get('elements'), 'd'):>7} "
       f"{f(r.get('median_s'), '.3f'):>10} {f(r.get('max_rss_mb'), '.0f'):>8} "
-      f"{f(r.get('invalid_minDetJac_le_0'), 'd'):>8} {f(r.get('min_minSJ'), '.4f'):>10}  "
+      f"{f(r.get('invalid_minDetJac_le_0'), 'd'):>8} {f(r.get('min_minSJ'), '.4g'):>10}  "
       f"{r['status']}" + (f" ({note})" if note else ""))
 EOF
 )")
         done < <("$PYTHON" benches/curving_meshes.py --time "$name" --mesh "$mesh" --order $ORDER \
-                    --repeat "$REPEAT" --timeout "$GMSH_TIMEOUT" | grep '^@@GMSH@@')
+                    --repeat "$REPEAT" --timeout "$GMSH_TIMEOUT" --max-mem-gb "$GMSH_MAX_MEM_GB" | grep '^@@GMSH@@')
     fi
 done
 

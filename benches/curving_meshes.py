@@ -14,7 +14,7 @@ Usage:
           * setOrder          gmsh.model.mesh.setOrder(p)
           * HighOrderElastic  setOrder(p) (untimed), then optimize("HighOrderElastic")
         --repeat times each, every run in its own subprocess (a crash or a run
-        longer than --timeout seconds is reported; after a timeout the remaining
+        longer than --timeout seconds or above --max-mem-gb is reported; after a failure the remaining
         repetitions of that method are skipped).  Prints one line
         "@@GMSH@@ {json}" per method with the median time, the invalid-element
         count (getElementQualities minDetJac <= 0) and the min minSJ.
@@ -197,6 +197,7 @@ def make(outdir, only):
         t0 = time.perf_counter()
         # a fresh Gmsh session per mesh (options and state survive gmsh.clear())
         gmsh.initialize(["curving_meshes"], readConfigFiles=False)
+        gmsh.option.setNumber("General.Terminal", 0)
         fresh_mesh(gmsh, name)
         q = quality(gmsh, dim)
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
@@ -250,27 +251,38 @@ def worker(name, method, order, msh):
     print("@@RESULT@@" + json.dumps(res), flush=True)
 
 
-def run_once(name, method, order, timeout, msh):
+def run_once(name, method, order, timeout, msh, max_mem_gb):
     cmd = [sys.executable, os.path.abspath(__file__), "--worker", name, method, "--order", str(order)]
     if msh:
         cmd += ["--mesh", os.path.abspath(msh)]
+
+    def limit():  # address-space cap: fail this run, not the machine (OOM killer)
+        if max_mem_gb > 0:
+            b = int(max_mem_gb * 2**30)
+            resource.setrlimit(resource.RLIMIT_AS, (b, b))
+
     t0 = time.perf_counter()
     try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, preexec_fn=limit)
     except subprocess.TimeoutExpired:
         return {"status": "timeout", "note": f"killed after {time.perf_counter() - t0:.0f} s"}
     for line in p.stdout.splitlines():
         if line.startswith("@@RESULT@@"):
             return json.loads(line[len("@@RESULT@@"):])
-    tail = (p.stderr or p.stdout or "").strip().splitlines()[-3:]
-    return {"status": "aborted", "returncode": p.returncode, "stderr_tail": tail}
+    tail = (p.stderr or p.stdout or "").strip().splitlines()[-2:]
+    note = f"exit {p.returncode} after {time.perf_counter() - t0:.0f} s"
+    if max_mem_gb > 0:
+        note += f", address space capped at {max_mem_gb:g} GB"
+    if tail:
+        note += ": " + " | ".join(tail)
+    return {"status": "aborted", "returncode": p.returncode, "note": note}
 
 
-def time_gmsh(name, order, repeat, timeout, methods, msh):
+def time_gmsh(name, order, repeat, timeout, methods, msh, max_mem_gb):
     for method in methods:
         runs = []
         for i in range(max(1, repeat)):
-            r = run_once(name, method, order, timeout, msh)
+            r = run_once(name, method, order, timeout, msh, max_mem_gb)
             runs.append(r)
             print(f"#   {name} {method} run {i + 1}: {r.get('status')} "
                   f"{r.get('time_s', float('nan')):.3f} s", file=sys.stderr, flush=True)
@@ -289,7 +301,7 @@ def time_gmsh(name, order, repeat, timeout, methods, msh):
             if "setOrder_s" in last:
                 out["setOrder_s"] = last["setOrder_s"]
         if runs[-1].get("status") != "ok":
-            out["note"] = runs[-1].get("note") or runs[-1].get("error") or runs[-1].get("stderr_tail")
+            out["note"] = runs[-1].get("note") or runs[-1].get("error")
         print("@@GMSH@@ " + json.dumps(out), flush=True)
 
 
@@ -304,6 +316,8 @@ def main():
     ap.add_argument("--order", type=int, default=3)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--timeout", type=float, default=600.0, help="per-run limit in seconds")
+    ap.add_argument("--max-mem-gb", type=float, default=16.0,
+                    help="per-run address-space cap in GB, 0 for none (default 16)")
     ap.add_argument("--worker", nargs=2, metavar=("NAME", "METHOD"), help=argparse.SUPPRESS)
     args = ap.parse_args()
 
@@ -311,7 +325,7 @@ def main():
         worker(args.worker[0], args.worker[1], args.order, args.mesh)
     elif args.time:
         time_gmsh(args.time, args.order, args.repeat, args.timeout,
-                  args.method or ["setOrder", "HighOrderElastic"], args.mesh)
+                  args.method or ["setOrder", "HighOrderElastic"], args.mesh, args.max_mem_gb)
     elif args.outdir:
         make(args.outdir, args.only)
     else:

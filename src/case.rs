@@ -283,9 +283,16 @@ pub struct TimeSpec {
     /// Weight of the div term of the functional.
     #[serde(default = "one")]
     pub div_weight: f64,
-    /// `auto` (default), `cholesky` or `cg`.
+    /// `auto` (default), `cholesky`, `cg` or `amg`.
     #[serde(default)]
     pub solver: SolverChoice,
+    /// Relative residual at which CG (`cg`, `amg`) stops.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_tolerance() -> f64 {
+    crate::solve::DEFAULT_TOLERANCE
 }
 
 fn default_steps() -> usize {
@@ -298,7 +305,7 @@ fn one() -> f64 {
 
 impl Default for TimeSpec {
     fn default() -> Self {
-        TimeSpec { steps: default_steps(), integrator: Integrator::Euler, div_weight: 1.0, solver: SolverChoice::Auto }
+        TimeSpec { steps: default_steps(), integrator: Integrator::Euler, div_weight: 1.0, solver: SolverChoice::Auto, tolerance: default_tolerance() }
     }
 }
 
@@ -498,6 +505,9 @@ impl Case {
         if !(self.time.div_weight > 0.0 && self.time.div_weight.is_finite()) {
             return Err(err("field `time.div_weight`: must be a positive number".into()));
         }
+        if !(self.time.tolerance > 0.0 && self.time.tolerance < 1.0) {
+            return Err(err(format!("field `time.tolerance`: must lie in (0, 1), got {}", self.time.tolerance)));
+        }
         if let Some(t) = self.output.frames.iter().find(|t| !(0.0..=1.0).contains(*t)) {
             return Err(err(format!("field `output.frames`: {t} is outside [0, 1]")));
         }
@@ -516,7 +526,7 @@ impl Case {
                     return Err(err("field `highorder.steps`: must be at least 1".into()));
                 }
                 let steps = h.steps.unwrap_or((self.time.steps / 2).max(4));
-                let flow = DeformOptions { integrator: self.time.integrator, div_weight: self.time.div_weight, solver: self.time.solver, ..Default::default() };
+                let flow = DeformOptions { integrator: self.time.integrator, div_weight: self.time.div_weight, solver: self.time.solver, tolerance: self.time.tolerance, ..Default::default() };
                 Some(CurveOptions { order: h.order, spacing: h.spacing, steps, flow, ..Default::default() })
             }
         };
@@ -533,6 +543,7 @@ impl Case {
             integrator: self.time.integrator,
             div_weight: self.time.div_weight,
             solver: self.time.solver,
+            tolerance: self.time.tolerance,
             ..Default::default()
         };
         if dim == 2 {

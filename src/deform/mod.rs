@@ -311,15 +311,20 @@ pub const AUTO_AMG_UNKNOWNS: [usize; 2] = [200_000, 20_000];
 
 impl SolverChoice {
     /// The solver this choice makes for a `dim`-D system of `unknowns`.
-    pub fn make(self, dim: usize, unknowns: usize) -> Box<dyn SpdSolver> {
+    pub fn make(self, dim: usize, unknowns: usize, tolerance: f64) -> Box<dyn SpdSolver> {
         let large = unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)];
         match self {
             SolverChoice::Cholesky => Box::new(CholeskySolver::new()),
             SolverChoice::Auto if !large => Box::new(CholeskySolver::new()),
-            SolverChoice::Cg => Box::new(ConjugateGradient::new(Jacobi::default())),
+            SolverChoice::Cg => {
+                let mut cg = ConjugateGradient::new(Jacobi::default());
+                cg.tolerance = tolerance;
+                Box::new(cg)
+            }
             SolverChoice::Auto | SolverChoice::Amg => {
                 let mut cg = ConjugateGradient::new(Amg::default());
                 cg.max_iterations = 1000;
+                cg.tolerance = tolerance;
                 Box::new(cg)
             }
         }
@@ -339,11 +344,13 @@ pub struct DeformOptions {
     pub max_halvings: usize,
     /// The sparse solver.
     pub solver: SolverChoice,
+    /// Relative residual at which an iterative solver stops.
+    pub tolerance: f64,
 }
 
 impl Default for DeformOptions {
     fn default() -> Self {
-        DeformOptions { steps: 40, integrator: Integrator::Euler, div_weight: 1.0, max_halvings: 12, solver: SolverChoice::Auto }
+        DeformOptions { steps: 40, integrator: Integrator::Euler, div_weight: 1.0, max_halvings: 12, solver: SolverChoice::Auto, tolerance: crate::solve::DEFAULT_TOLERANCE }
     }
 }
 
@@ -385,7 +392,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// part can reach its target, builds the pattern and analyses it.
     pub fn new(mesh: M, parts: Vec<BoundaryPart<D>>, field: JacobianField, options: DeformOptions) -> Result<Self, DeformError> {
         // D unknowns per node bound the system size from above
-        let solver = options.solver.make(D, D * mesh.nodes().len());
+        let solver = options.solver.make(D, D * mesh.nodes().len(), options.tolerance);
         Self::with_solver(mesh, parts, field, options, solver)
     }
 

@@ -20,7 +20,7 @@ mod cholesky;
 mod csr;
 
 pub use amg::{Amg, AmgOptions};
-pub use cg::{ConjugateGradient, Jacobi, Preconditioner};
+pub use cg::{ConjugateGradient, Jacobi, Preconditioner, DEFAULT_TOLERANCE};
 pub use cholesky::CholeskySolver;
 pub use csr::{axpy, dot, Csr};
 
