@@ -264,7 +264,11 @@ fn split_half(b: &[f64; 27], stride: usize) -> [[f64; 27]; 2] {
 /// # Panics
 /// If a cell refers to a node beyond `nodes`.
 pub fn invalid_hex_cells(mesh: &HexMesh, nodes: &[Point3]) -> Vec<usize> {
+    use rayon::prelude::*;
+    // once per step attempt over every cell: in parallel
     (0..mesh.num_cells())
+        .into_par_iter()
+        .with_min_len(256)
         .filter(|&c| !hex_is_valid(&mesh.cells[c].map(|n| nodes[n])))
         .collect()
 }

@@ -75,7 +75,7 @@ enum Command {
         /// Cells per side.
         #[arg(long, value_delimiter = ',', default_values_t = vec![100, 200, 400, 800])]
         sizes: Vec<usize>,
-        /// Repetitions per size (the best is reported).
+        /// Repetitions per size (the median is reported).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
         /// 2: the quarter disk on n² quads; 3: the quarter ball on n³ hexes.
@@ -167,14 +167,14 @@ fn run(cli: Cli) -> Result<()> {
                 .map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cg or amg, got `{solver}`"))?;
             anyhow::ensure!(dim == 2 || dim == 3, "--dim must be 2 or 3, got {dim}");
             println!(
-                "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>6} {:>12} {:>11} {:>11} {:>10}",
-                "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "iters", "us/unknown", "first_s", "setup_s", "peak_MiB"
+                "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>6} {:>12} {:>6} {:>11} {:>11} {:>10}",
+                "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "iters", "us/unknown", "cores", "first_s", "setup_s", "peak_MiB"
             );
             for n in sizes {
                 let b = if dim == 2 { deformesh::bench::one_step(n, repeat, solver) } else { deformesh::bench::one_step_3d(n, repeat, solver) };
                 let b = b.map_err(|e| anyhow::anyhow!(e))?;
                 println!(
-                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>6} {:>12.3} {:>11.4} {:>11.4} {:>10}",
+                    "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>6} {:>12.3} {:>6.2} {:>11.4} {:>11.4} {:>10}",
                     format!("{n}{}", if dim == 2 { "²" } else { "³" }),
                     b.unknowns,
                     b.assemble_s,
@@ -183,6 +183,7 @@ fn run(cli: Cli) -> Result<()> {
                     b.step_s(),
                     b.iterations,
                     1e6 * b.step_s() / b.unknowns as f64,
+                    b.cores_busy,
                     b.first_step_s,
                     b.setup_s,
                     deformesh::bench::peak_memory_mib().map_or("n/a".to_string(), |m| format!("{m:.0}"))

@@ -256,14 +256,14 @@ fn multigrid_gives_the_cholesky_mesh_with_few_iterations() {
     for n in [50, 100, 200] {
         let d = quarter_disk_with(n, SolverChoice::Amg);
         let r = d.solver_report();
-        // measured: means 9.1, 9.6, 10.4 and at most 14, 15, 16 (the solve
-        // that triggers a rebuild of the hierarchy)
-        assert!(r.iterations_max < 20 && r.iterations_mean < 12.0 && r.iterations_mean > 2.0, "{n}²: {r:?}");
+        // measured: means 10.4, 9.8, 11.8 and at most 18, 14, 17 (a solve
+        // after which the hierarchy is rebuilt)
+        assert!(r.iterations_max < 20 && r.iterations_mean < 13.0 && r.iterations_mean > 2.0, "{n}²: {r:?}");
         assert!(mesh_quality(&d.mesh).invalid_cells.is_empty());
         if n == 50 {
             let diff = exact.mesh.nodes.iter().zip(&d.mesh.nodes).map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs())).fold(0.0, f64::max);
-            // measured: 1e-10 at tolerance 1e-8
-            assert!(diff < 1e-8, "meshes differ by {diff}");
+            // measured: 2.8e-9 at the default tolerance 1e-7
+            assert!(diff < 1e-7, "meshes differ by {diff}");
         }
     }
 }
