@@ -153,20 +153,33 @@ pub fn quad_area(p: &[Point2; 4]) -> f64 {
 /// a node: cells of one colour can then be scattered into a global matrix
 /// in parallel without write conflicts. Returns the cells grouped by colour.
 pub fn colour_cells<const N: usize>(cells: &[[usize; N]], num_nodes: usize) -> Vec<Vec<usize>> {
-    // node_colours[n] is a bit set of the colours already touching node n
+    // Colours are handed out 64 at a time, a node's taken ones kept as a
+    // bit set; a cell that finds all 64 taken (a node with more than 63
+    // cells) waits for the next round, whose colours are all new.
     let mut node_colours = vec![0u64; num_nodes];
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (c, cell) in cells.iter().enumerate() {
-        let used = cell.iter().fold(0u64, |acc, &n| acc | node_colours[n]);
-        let colour = (!used).trailing_zeros() as usize;
-        assert!(colour < 64, "more than 64 colours: a node with over 60 cells");
-        for &n in cell {
-            node_colours[n] |= 1 << colour;
+    let mut pending: Vec<usize> = (0..cells.len()).collect();
+    let mut base = 0;
+    while !pending.is_empty() {
+        node_colours.iter_mut().for_each(|b| *b = 0);
+        let mut later = Vec::new();
+        for c in pending {
+            let used = cells[c].iter().fold(0u64, |acc, &n| acc | node_colours[n]);
+            if used == u64::MAX {
+                later.push(c);
+                continue;
+            }
+            let colour = (!used).trailing_zeros() as usize;
+            for &n in &cells[c] {
+                node_colours[n] |= 1 << colour;
+            }
+            if groups.len() <= base + colour {
+                groups.resize_with(base + colour + 1, Vec::new);
+            }
+            groups[base + colour].push(c);
         }
-        if groups.len() <= colour {
-            groups.resize_with(colour + 1, Vec::new);
-        }
-        groups[colour].push(c);
+        pending = later;
+        base += 64;
     }
     groups
 }
@@ -181,15 +194,29 @@ mod colour_tests {
         let groups = colour_cells(&m.cells, m.num_nodes());
         assert!(groups.len() <= 4, "a structured mesh needs 4 colours, got {}", groups.len());
         assert_eq!(groups.iter().map(Vec::len).sum::<usize>(), 35);
-        for g in &groups {
-            let mut seen = vec![false; m.num_nodes()];
+        assert_disjoint(&groups, &m.cells, m.num_nodes());
+    }
+
+    fn assert_disjoint(groups: &[Vec<usize>], cells: &[[usize; 4]], nodes: usize) {
+        for g in groups {
+            let mut seen = vec![false; nodes];
             for &c in g {
-                for &n in &m.cells[c] {
+                for &n in &cells[c] {
                     assert!(!seen[n]);
                     seen[n] = true;
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_node_with_seventy_cells_gets_seventy_colours() {
+        // a fan of 70 quads around node 0 (used to panic past 64 colours)
+        let cells: Vec<[usize; 4]> = (0..70).map(|k| [0, 1 + 2 * k, 2 + 2 * k, 1 + (2 * k + 2) % 140]).collect();
+        let groups = colour_cells(&cells, 141);
+        assert_eq!(groups.len(), 70);
+        assert!(groups.iter().all(|g| g.len() == 1));
+        assert_disjoint(&groups, &cells, 141);
     }
 }
 
