@@ -267,3 +267,17 @@ fn multigrid_gives_the_cholesky_mesh_with_few_iterations() {
         }
     }
 }
+
+#[test]
+fn a_field_that_is_not_one_at_the_start_is_refused() {
+    let with = |f: &str| {
+        let text = DEMO_CASE.replace("type = \"uniform\"", &format!("type = \"expression\"\nf = \"{f}\""));
+        let s = Case::parse(&text, "q").unwrap().setup("q", Path::new(".")).unwrap();
+        Deformation::new(s.mesh, s.parts, s.field, s.options).map(|_| ())
+    };
+    // g(x, 0) = 1 + 3x: the run used to go on and end with J/f in [0.56, 1.97]
+    let e = with("1 + 3*x*(1-0.5*t)").err().expect("refused").to_string();
+    assert!(e.contains("must be 1 everywhere at t = 0") && e.contains("g = 1.") && e.contains("at t = 0"), "{e}");
+    // a t-dependent field that starts at 1 runs
+    assert!(with("1 + 3*x*t").is_ok());
+}

@@ -230,6 +230,14 @@ pub enum DeformError {
         /// The cells that invert.
         cells: Vec<usize>,
     },
+    /// g(·, 0) is not 1: the method starts from the undeformed mesh.
+    #[error("the prescribed Jacobian must be 1 everywhere at t = 0 (the mesh starts undeformed), but g = {g} at ({:.4}, {:.4}, {:.4}) at t = 0; write f so that it is 1 at t = 0, or give only its final value (without t) and let `path` blend it in", x[0], x[1], x[2])]
+    NotOneAtStart {
+        /// Where.
+        x: [f64; 3],
+        /// The value found.
+        g: f64,
+    },
     /// The starting mesh is invalid.
     #[error("the starting mesh has {} inverted cell(s), first {:?}", .0.len(), &.0[..(.0.len().min(10))])]
     InvalidStart(Vec<usize>),
@@ -407,6 +415,15 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         let bad = mesh.invalid_cells(mesh.nodes());
         if !bad.is_empty() {
             return Err(DeformError::InvalidStart(bad));
+        }
+        // f = c g with c normalising ∫ 1/f: only g(·, 0) = 1 makes φ₀ the
+        // identity, which every step builds on
+        for p in mesh.nodes() {
+            let x = lift(*p);
+            let g = field.g_and_dt(x, 0.0).0;
+            if !((g - 1.0).abs() <= 1e-9) {
+                return Err(DeformError::NotOneAtStart { x, g });
+            }
         }
         let boundary = mesh.boundary(parts)?;
         // constraint kinds are fixed for the run: build the pattern once
