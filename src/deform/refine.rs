@@ -7,14 +7,21 @@
 //! Algorithm 1 on the fine mesh, with a uniform f, carries them onto the
 //! true geometry while the interior follows:
 //!
-//! - old (coarse) boundary nodes are fixed: they are on the geometry;
+//! - old (coarse) nodes are fixed: the boundary ones are on the geometry,
+//!   and the interior ones keep the layers (a first layer of 1e-5 moved by
+//!   13% at its vertices when they were free);
 //! - a new node inside a coarse boundary edge (2D) or face (3D) of a moving
 //!   part slides onto `Γ_t(s) = P₀(s) + t (X(P₀(s)) − P₀(s))`, the blend of
 //!   the flat coarse facet P₀ and its image X on the target (`u·n = v·n/f`,
 //!   put back onto Γ_t after every step), or with Dirichlet data follows
 //!   its straight path to X(x₀) (the paper's choice);
 //! - in 3D a new node on a coarse edge glides along that edge's blended
-//!   curve (its two components across the curve prescribed);
+//!   curve (its two components across the curve prescribed), except on an
+//!   edge inside one flat slip plane (two coplanar facets of one slip
+//!   part): there it slides in the plane like a facet node (u·n = 0, put
+//!   back onto the plane). Held on its straight edge, such a node 1e-5 from
+//!   a curved wall could not follow the wall's new nodes, which move out by
+//!   the sagitta, and a thin boundary layer tangled at t ≈ 1e-5 / sagitta;
 //! - a curved slip wall is a target like a moving part: the new nodes go
 //!   onto it; a flat slip wall keeps its nodes gliding in its plane;
 //! - fixed parts stay.
@@ -95,6 +102,9 @@ pub struct Subdivision<M, const D: usize> {
     /// Coarse boundary edges in 3D: end positions and the facets they bound.
     edges: Vec<([[f64; D]; 2], Vec<usize>)>,
     places: Vec<Place>,
+    /// Per fine node inside a coarse edge (3D): the facets holding it and
+    /// its parameters on each.
+    on_facets: HashMap<usize, Vec<(usize, [f64; 2])>>,
 }
 
 /// A topological name for a fine node, the same from every coarse cell
@@ -322,6 +332,7 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
     let mut facet_corners = Vec::new();
     let mut edges: Vec<([[f64; D]; 2], Vec<usize>)> = Vec::new();
     let mut edge_ids: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut on_facets: HashMap<usize, Vec<(usize, [f64; 2])>> = HashMap::new();
     for (f, (q, part)) in coarse_facets.into_iter().enumerate() {
         let (nu, nv) = if D == 2 { (n1, 1) } else { (n1, n1) };
         let mut grid = Vec::with_capacity(nu * nv);
@@ -339,6 +350,10 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
                         });
                         if !edges[e].1.contains(&f) {
                             edges[e].1.push(f);
+                        }
+                        let on = on_facets.entry(id).or_default();
+                        if !on.iter().any(|o| o.0 == f) {
+                            on.push((f, [t[u], t[v]]));
                         }
                         Place::Edge { edge: e, sigma: t[k] }
                     }
@@ -360,9 +375,14 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
         facet_corners.push(q.iter().map(|&n| coarse.nodes()[n]).collect());
         facets.push((grid, part));
     }
-    let coarse_nodes = (0..coarse.nodes().len()).map(|n| ids.get(&Key::Vertex(n)).copied().unwrap_or(usize::MAX)).collect();
+    let coarse_nodes: Vec<usize> = (0..coarse.nodes().len()).map(|n| ids.get(&Key::Vertex(n)).copied().unwrap_or(usize::MAX)).collect();
+    // every coarse node stays, the interior ones too: the elements keep
+    // the coarse vertices, so a thin first layer keeps its height there
+    for &n in coarse_nodes.iter().filter(|&&n| n != usize::MAX) {
+        places[n] = Place::Vertex;
+    }
     let fine = M::assemble(nodes, sub_cells, fine_facets, coarse.names().to_vec());
-    Ok(Subdivision { fine, elements, facets, coarse_nodes, p, facet_corners, edges, places })
+    Ok(Subdivision { fine, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets })
 }
 
 /// What a fine boundary node does during Algorithm 2.
@@ -429,6 +449,7 @@ pub struct RefineMesh<M, const D: usize> {
     facet_parts: Vec<usize>,
     edges: Vec<([[f64; D]; 2], Vec<usize>)>,
     places: Vec<Place>,
+    on_facets: HashMap<usize, Vec<(usize, [f64; 2])>>,
 }
 
 impl<M: Clone, const D: usize> Subdivision<M, D> {
@@ -440,6 +461,7 @@ impl<M: Clone, const D: usize> Subdivision<M, D> {
             facet_parts: self.facets.iter().map(|f| f.1).collect(),
             edges: self.edges.clone(),
             places: self.places.clone(),
+            on_facets: self.on_facets.clone(),
         }
     }
 }
@@ -658,6 +680,53 @@ impl<const D: usize> BoundaryModel<D> for RefineBoundary<D> {
     }
 }
 
+/// Unit normal of a bilinear facet with corners `c` at s (zero if degenerate).
+fn facet_normal<const D: usize>(c: &[[f64; D]], s: [f64; 2]) -> [f64; 3] {
+    if D != 3 || c.len() != 4 {
+        return [0.0; 3];
+    }
+    let du: [f64; 3] = std::array::from_fn(|i| (1.0 - s[1]) * (c[1][i] - c[0][i]) + s[1] * (c[2][i] - c[3][i]));
+    let dv: [f64; 3] = std::array::from_fn(|i| (1.0 - s[0]) * (c[3][i] - c[0][i]) + s[0] * (c[2][i] - c[1][i]));
+    let n = crate::numeric::cross3(du, dv);
+    let l = dot(n, n).sqrt();
+    if l > 0.0 { n.map(|x| x / l) } else { [0.0; 3] }
+}
+
+/// Largest distance of a facet's corners from the plane through its first
+/// corner with normal n, relative to its diameter.
+fn off_plane<const D: usize>(c: &[[f64; D]], n: [f64; 3]) -> f64 {
+    let diam = (0..c.len()).flat_map(|a| (0..c.len()).map(move |b| (a, b))).map(|(a, b)| (0..D).map(|k| (c[a][k] - c[b][k]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max);
+    c.iter().map(|x| (0..D).map(|k| (x[k] - c[0][k]) * n[k.min(2)]).sum::<f64>().abs()).fold(0.0, f64::max) / diam.max(f64::MIN_POSITIVE)
+}
+
+impl<M, const D: usize> RefineMesh<M, D> {
+    /// For fine node `i` inside a coarse edge in 3D: if the edge lies
+    /// inside one plane — between two flat, coplanar facets of one flat
+    /// slip part — the two facets (carrier indices) and the node's
+    /// parameters on each. A crease (two parts, non-coplanar facets) gives
+    /// None. (An edge inside one smooth curved part still glides along its
+    /// blended curve: letting it slide on the surface tangled the 1e-5
+    /// layer of the extruded cylinder at t = 0.15.)
+    fn inside_one_plane(&self, i: usize, parts: &[BoundaryPart<D>], carriers: &[Carrier<D>]) -> Option<Vec<(usize, [f64; 2])>> {
+        let on = self.on_facets.get(&i)?;
+        if D != 3 || on.len() != 2 {
+            return None;
+        }
+        let k = self.facet_parts[on[0].0];
+        if self.facet_parts[on[1].0] != k {
+            return None;
+        }
+        if !matches!(parts[k].kind, PartKind::Slip { wall: None }) {
+            return None;
+        }
+        let corners = |f: usize| &carriers[f].corners;
+        let n: Vec<[f64; 3]> = on.iter().map(|&(f, s)| facet_normal(corners(f), s)).collect();
+        // one plane: the facets are flat and coplanar
+        let flat = on.iter().zip(&n).all(|(&(f, _), &nf)| off_plane(corners(f), nf) < 1e-10);
+        (flat && 1.0 - dot(n[0], n[1]).abs() < 1e-12).then(|| on.clone())
+    }
+}
+
 impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMesh<M, D> {
     type Boundary = RefineBoundary<D>;
 
@@ -717,6 +786,12 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
                 })?;
                 targets[i] = Some((image, k));
                 Role2::Path
+            } else if let Some(on) = self.inside_one_plane(i, &parts, &carriers) {
+                // inside one flat slip plane: it slides in the plane like a
+                // facet node (the first facet's carrier is unbounded and
+                // flat), not along the coarse edge: held on the edge, a node
+                // 1e-5 from a curved wall cannot follow the wall's new nodes
+                Role2::Slide { carrier: on[0].0, s: on[0].1 }
             } else {
                 Role2::Slide { carrier, s }
             };

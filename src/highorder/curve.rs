@@ -86,6 +86,22 @@ pub struct CurvedQuality {
     /// Largest distance of a densely sampled point of the curved boundary
     /// to its shape.
     pub boundary_sample_distance: f64,
+    /// Per curved group, the largest relative change of the first-layer
+    /// height: the distance from a node of a curved boundary element to the
+    /// node across its cell (the opposite face, same face coordinates),
+    /// curved against straight, at the coarse vertices and over all nodes.
+    pub first_layer_change: std::collections::BTreeMap<String, FirstLayer>,
+}
+
+/// Largest relative change of the first-layer height along a curved group.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct FirstLayer {
+    /// At the coarse vertices (the old nodes: fixed, so 0 unless a vertex
+    /// across the layer moved).
+    pub vertices: f64,
+    /// At every node of the group's elements, new nodes included (shear
+    /// along the wall counts too).
+    pub all_nodes: f64,
 }
 
 /// A curved mesh with its certificates and figures.
@@ -132,6 +148,7 @@ pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certifi
         invalid_elements: invalid,
         boundary_node_distance: 0.0,
         boundary_sample_distance: 0.0,
+        first_layer_change: Default::default(),
     };
     Ok((certs, q))
 }
@@ -195,7 +212,82 @@ where
     // they were not moved, so only this shows a vertex off its shape
     quality.boundary_node_distance = moved_distance.max(node_distance(&mesh, &parts2));
     quality.boundary_sample_distance = sampled_distance(&mesh, &parts2, opts.samples)?;
+    quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
     Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), solver: def.solver_report(), seconds: (alg2, clock.elapsed().as_secs_f64()) })
+}
+
+/// Per moving (or curved slip) part, the largest relative change of the
+/// first-layer height between the straight positions `straight` and the
+/// mesh: see [`CurvedQuality::first_layer_change`].
+pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64; D]], parts: &[BoundaryPart<D>]) -> std::collections::BTreeMap<String, FirstLayer> {
+    use std::collections::{BTreeMap, HashMap};
+    let p = mesh.p;
+    let n1 = p + 1;
+    let lin = |idx: [usize; 3]| (0..D).map(|d| idx[d] * n1.pow(d as u32)).sum::<usize>();
+    let corners_key = |mut k: Vec<usize>| {
+        k.sort_unstable();
+        k
+    };
+    // every element face by its sorted corner nodes: (element, axis, side)
+    let mut faces: HashMap<Vec<usize>, (usize, usize, usize)> = HashMap::new();
+    for (e, el) in mesh.cells.iter().enumerate() {
+        for d in 0..D {
+            for side in [0, p] {
+                let corners: Vec<usize> = (0..1usize << (D - 1))
+                    .map(|b| {
+                        let mut idx = [0; 3];
+                        let mut bit = 0;
+                        for a in 0..D {
+                            idx[a] = if a == d {
+                                side
+                            } else {
+                                bit += 1;
+                                p * ((b >> (bit - 1)) & 1)
+                            };
+                        }
+                        el[lin(idx)]
+                    })
+                    .collect();
+                faces.insert(corners_key(corners), (e, d, side));
+            }
+        }
+    }
+    let dist = |x: &[[f64; D]], a: usize, b: usize| (0..D).map(|k| (x[a][k] - x[b][k]).powi(2)).sum::<f64>().sqrt();
+    let mut out = BTreeMap::new();
+    for b in &mesh.boundary {
+        let Some(PartKind::Move { .. }) = parts.get(b.part).map(|q| &q.kind) else { continue };
+        let grid_corners = if D == 2 { vec![b.nodes[0], b.nodes[p]] } else { vec![b.nodes[0], b.nodes[p], b.nodes[n1 * n1 - 1], b.nodes[n1 * p]] };
+        let Some(&(e, d, side)) = faces.get(&corners_key(grid_corners)) else { continue };
+        let el = &mesh.cells[e];
+        let mut worst = FirstLayer::default();
+        for k in 0..n1.pow(D as u32 - 1) {
+            let mut idx = [0; 3];
+            let mut rest = k;
+            for a in 0..D {
+                idx[a] = if a == d {
+                    side
+                } else {
+                    let v = rest % n1;
+                    rest /= n1;
+                    v
+                };
+            }
+            let node = el[lin(idx)];
+            idx[d] = p - side;
+            let opp = el[lin(idx)];
+            let (h0, h) = (dist(straight, node, opp), dist(&mesh.nodes, node, opp));
+            let change = (h / h0 - 1.0).abs();
+            worst.all_nodes = worst.all_nodes.max(change);
+            if (0..D).all(|a| idx[a] == 0 || idx[a] == p) {
+                worst.vertices = worst.vertices.max(change);
+            }
+        }
+        let name = mesh.part_names.get(b.part).cloned().unwrap_or_else(|| format!("#{}", b.part));
+        let w: &mut FirstLayer = out.entry(name).or_default();
+        w.vertices = w.vertices.max(worst.vertices);
+        w.all_nodes = w.all_nodes.max(worst.all_nodes);
+    }
+    out
 }
 
 /// The largest distance of a node of a boundary element of a moving (or
