@@ -58,6 +58,9 @@ enum Command {
         /// sliding (default) or dirichlet: how new nodes reach the shapes.
         #[arg(long, default_value = "sliding")]
         mode: String,
+        /// Linear solver of Algorithm 2: auto, cholesky, cg or amg.
+        #[arg(long, default_value = "auto")]
+        solver: String,
         /// The curved mesh to write.
         #[arg(short, long)]
         out: PathBuf,
@@ -119,7 +122,7 @@ fn run(cli: Cli) -> Result<()> {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out).context("<built-in demo>")
         }
-        Command::Curve { mesh, geometry, order, spacing, steps, mode, out } => {
+        Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, out } => {
             deformesh::highorder::check_order(order).map_err(|e| anyhow::anyhow!("--order: {e}"))?;
             anyhow::ensure!(steps >= 1, "--steps must be at least 1");
             let spacing: deformesh::highorder::Spacing = serde_json::from_value(serde_json::Value::String(spacing.clone()))
@@ -129,7 +132,9 @@ fn run(cli: Cli) -> Result<()> {
                 "dirichlet" => true,
                 other => anyhow::bail!("--mode must be sliding or dirichlet, got `{other}`"),
             };
-            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, ..Default::default() };
+            let solver = solver_choice(&solver)?;
+            let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
+            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, flow, ..Default::default() };
             let job = deformesh::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
             let bar = Bar::new();
             let r = deformesh::driver::curve_file(&job, |p| bar.update(p)).map_err(anyhow::Error::from).with_context(|| mesh.display().to_string());
@@ -163,8 +168,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Bench { sizes, repeat, dim, solver } => {
-            let solver: SolverChoice = serde_json::from_value(serde_json::Value::String(solver.clone()))
-                .map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cg or amg, got `{solver}`"))?;
+            let solver = solver_choice(&solver)?;
             anyhow::ensure!(dim == 2 || dim == 3, "--dim must be 2 or 3, got {dim}");
             println!(
                 "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>6} {:>12} {:>6} {:>11} {:>11} {:>10}",
@@ -192,6 +196,10 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn solver_choice(name: &str) -> Result<SolverChoice> {
+    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cg or amg, got `{name}`"))
 }
 
 fn run_and_print(setup: AnySetup, out: &Path) -> Result<()> {
