@@ -90,35 +90,10 @@ def build_cylinder(gmsh):
 
 
 def build_ball(gmsh):
-    gmsh.model.add("ball_octant_hex")
-    occ = gmsh.model.occ
-    sph = occ.addSphere(0, 0, 0, 1)
-    box = occ.addBox(0, 0, 0, 2, 2, 2)
-    out, _ = occ.intersect([(3, sph)], [(3, box)])
-    occ.synchronize()
-    vols = [t for d, t in out if d == 3]
-    groups = {"sphere": [], "plane_x0": [], "plane_y0": [], "plane_z0": []}
-    for _, s in gmsh.model.getEntities(2):
-        c = occ.getCenterOfMass(2, s)
-        if abs(c[0]) < 1e-6:
-            groups["plane_x0"].append(s)
-        elif abs(c[1]) < 1e-6:
-            groups["plane_y0"].append(s)
-        elif abs(c[2]) < 1e-6:
-            groups["plane_z0"].append(s)
-        else:
-            groups["sphere"].append(s)
+    # one construction of the octant for both benchmark scripts
+    from curving_meshes import build_ball as build_octant
 
-    gmsh.option.setNumber("Mesh.MeshSizeMax", BALL_LC)
-    gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 2)  # tets -> hexes
-
-    # same physical tags as the reference file
-    gmsh.model.addPhysicalGroup(2, groups["sphere"], 1, "sphere")
-    gmsh.model.addPhysicalGroup(2, groups["plane_x0"], 2, "plane_x0")
-    gmsh.model.addPhysicalGroup(2, groups["plane_z0"], 3, "plane_z0")
-    gmsh.model.addPhysicalGroup(2, groups["plane_y0"], 4, "plane_y0")
-    gmsh.model.addPhysicalGroup(3, vols, 5, "solid")
-    gmsh.model.mesh.generate(3)
+    build_octant(gmsh, "ball_octant_hex", BALL_LC)
 
 
 BUILDERS = {"cylinder_bl_coarse": build_cylinder, "ball_octant_hex": build_ball}
