@@ -375,9 +375,9 @@ struct SyncPtr(*mut f64);
 unsafe impl Sync for SyncPtr {}
 unsafe impl Send for SyncPtr {}
 
-/// The div row and curl rows of one quadrature point in the nodes' frames.
-fn rows<const D: usize, const N: usize>(grad: &[[f64; N]; D], cons: &[Constraint<D>; N], bd: &mut [f64; MAX_LOCAL], bc: &mut [[f64; MAX_LOCAL]; 3]) -> usize {
-    let ncurl = if D == 2 { 1 } else { 3 };
+/// The div row and curl rows of one quadrature point in the nodes' frames
+/// (in 2D the curl is a scalar: rows 1 and 2 are zero).
+fn rows<const D: usize, const N: usize>(grad: &[[f64; N]; D], cons: &[Constraint<D>; N], bd: &mut [f64; MAX_LOCAL], bc: &mut [[f64; MAX_LOCAL]; 3]) {
     for a in 0..N {
         let g: [f64; 3] = std::array::from_fn(|i| if i < D { grad[i][a] } else { 0.0 });
         // coefficients of u_x, u_y, u_z of node a in div u and curl u
@@ -390,12 +390,11 @@ fn rows<const D: usize, const N: usize>(grad: &[[f64; N]; D], cons: &[Constraint
         for (k, dir) in cons[a].frame.iter().enumerate() {
             let l = D * a + k;
             bd[l] = (0..D).map(|i| div[i] * dir[i]).sum();
-            for r in 0..ncurl {
+            for r in 0..3 {
                 bc[r][l] = (0..D).map(|i| curl[r][i] * dir[i]).sum();
             }
         }
     }
-    ncurl
 }
 
 /// Element matrix (row-major, D·N square) and vector in the nodes' frames.
@@ -416,23 +415,19 @@ fn element<const D: usize, const N: usize, G: Fn([f64; D]) -> f64>(
         if !(det > 0.0) {
             return Err(LsfemError::Inverted { cell: c, det });
         }
-        let ncurl = rows(&grad, cons, &mut bd, &mut bc);
+        rows(&grad, cons, &mut bd, &mut bc);
         let wq = weight * det;
         let gq = g(x);
+        // the whole square, row by row: the inner loop runs over contiguous
+        // arrays and vectorises, which beats computing half and mirroring
+        let (d, c0, c1, c2) = (&bd[..nd], &bc[0][..nd], &bc[1][..nd], &bc[2][..nd]);
         for i in 0..nd {
-            f[i] += wq * w * gq * bd[i];
-            for j in 0..=i {
-                let mut v = w * bd[i] * bd[j];
-                for row in bc.iter().take(ncurl) {
-                    v += row[i] * row[j];
-                }
-                k[nd * i + j] += wq * v;
+            f[i] += wq * w * gq * d[i];
+            let (di, a0, a1, a2) = (wq * w * d[i], wq * c0[i], wq * c1[i], wq * c2[i]);
+            let row = &mut k[nd * i..nd * (i + 1)];
+            for j in 0..nd {
+                row[j] += di * d[j] + a0 * c0[j] + a1 * c1[j] + a2 * c2[j];
             }
-        }
-    }
-    for i in 0..nd {
-        for j in 0..i {
-            k[nd * j + i] = k[nd * i + j];
         }
     }
     Ok((k, f))
