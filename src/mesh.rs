@@ -5,6 +5,8 @@
 //! bilinear map from the reference square has a positive Jacobian on a
 //! valid cell. Boundary edges are oriented with the domain on their left.
 
+use std::ops::Range;
+
 /// A point or vector in the plane.
 pub type Point2 = [f64; 2];
 
@@ -149,34 +151,42 @@ pub fn quad_area(p: &[Point2; 4]) -> f64 {
     0.5 * ((p[2][0] - p[0][0]) * (p[3][1] - p[1][1]) - (p[3][0] - p[1][0]) * (p[2][1] - p[0][1]))
 }
 
-/// Greedy colouring of the cells so that no two cells of one colour share
-/// a node: cells of one colour can then be scattered into a global matrix
-/// in parallel without write conflicts. Returns the cells grouped by colour.
-pub fn colour_cells<const N: usize>(cells: &[[usize; N]], num_nodes: usize) -> Vec<Vec<usize>> {
+/// Greedy colouring of blocks of `block` consecutive cells so that no two
+/// blocks of one colour share a node: the blocks of one colour can then be
+/// scattered into a global matrix in parallel without write conflicts.
+/// Returns the blocks (cell ranges) grouped by colour.
+///
+/// Blocks rather than single cells because of the memory traffic: with one
+/// cell per item, a colour is spread over the whole mesh and every colour
+/// streams the whole matrix once (8 passes for hexes); a block of
+/// consecutive cells (meshes are numbered with locality) keeps the rows it
+/// shares in cache, and few colours are needed.
+pub fn colour_blocks<const N: usize>(cells: &[[usize; N]], num_nodes: usize, block: usize) -> Vec<Vec<Range<usize>>> {
+    let block = block.max(1);
+    let ranges: Vec<Range<usize>> = (0..cells.len().div_ceil(block)).map(|b| b * block..((b + 1) * block).min(cells.len())).collect();
     // Colours are handed out 64 at a time, a node's taken ones kept as a
-    // bit set; a cell that finds all 64 taken (a node with more than 63
-    // cells) waits for the next round, whose colours are all new.
+    // bit set; a block that finds all 64 taken (a node in more than 63
+    // blocks) waits for the next round, whose colours are all new.
     let mut node_colours = vec![0u64; num_nodes];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    let mut pending: Vec<usize> = (0..cells.len()).collect();
+    let mut groups: Vec<Vec<Range<usize>>> = Vec::new();
+    let mut pending: Vec<usize> = (0..ranges.len()).collect();
     let mut base = 0;
     while !pending.is_empty() {
         node_colours.iter_mut().for_each(|b| *b = 0);
         let mut later = Vec::new();
-        for c in pending {
-            let used = cells[c].iter().fold(0u64, |acc, &n| acc | node_colours[n]);
+        for b in pending {
+            let nodes = || cells[ranges[b].clone()].iter().flatten();
+            let used = nodes().fold(0u64, |acc, &n| acc | node_colours[n]);
             if used == u64::MAX {
-                later.push(c);
+                later.push(b);
                 continue;
             }
             let colour = (!used).trailing_zeros() as usize;
-            for &n in &cells[c] {
-                node_colours[n] |= 1 << colour;
-            }
+            nodes().for_each(|&n| node_colours[n] |= 1 << colour);
             if groups.len() <= base + colour {
                 groups.resize_with(base + colour + 1, Vec::new);
             }
-            groups[base + colour].push(c);
+            groups[base + colour].push(ranges[b].clone());
         }
         pending = later;
         base += 64;
@@ -191,20 +201,29 @@ mod colour_tests {
     #[test]
     fn colours_share_no_node() {
         let m = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 7, 5);
-        let groups = colour_cells(&m.cells, m.num_nodes());
+        let groups = colour_blocks(&m.cells, m.num_nodes(), 1);
         assert!(groups.len() <= 4, "a structured mesh needs 4 colours, got {}", groups.len());
-        assert_eq!(groups.iter().map(Vec::len).sum::<usize>(), 35);
+        assert_eq!(groups.iter().flatten().map(|r| r.len()).sum::<usize>(), 35);
         assert_disjoint(&groups, &m.cells, m.num_nodes());
     }
 
-    fn assert_disjoint(groups: &[Vec<usize>], cells: &[[usize; 4]], nodes: usize) {
+    #[test]
+    fn blocks_of_rows_need_two_colours() {
+        // blocks of 7 cells are whole rows of the 7 × 5 box: row k shares
+        // nodes with rows k ± 1 only, so the rows alternate two colours
+        let m = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 7, 5);
+        let groups = colour_blocks(&m.cells, m.num_nodes(), 7);
+        assert_eq!(groups.len(), 2);
+        assert_eq!(groups[0], vec![0..7, 14..21, 28..35]);
+        assert_disjoint(&groups, &m.cells, m.num_nodes());
+    }
+
+    fn assert_disjoint(groups: &[Vec<Range<usize>>], cells: &[[usize; 4]], nodes: usize) {
         for g in groups {
             let mut seen = vec![false; nodes];
-            for &c in g {
-                for &n in &cells[c] {
-                    assert!(!seen[n]);
-                    seen[n] = true;
-                }
+            for &n in g.iter().flat_map(|r| cells[r.clone()].iter().flatten()) {
+                assert!(!seen[n]);
+                seen[n] = true;
             }
         }
     }
@@ -213,7 +232,7 @@ mod colour_tests {
     fn a_node_with_seventy_cells_gets_seventy_colours() {
         // a fan of 70 quads around node 0 (used to panic past 64 colours)
         let cells: Vec<[usize; 4]> = (0..70).map(|k| [0, 1 + 2 * k, 2 + 2 * k, 1 + (2 * k + 2) % 140]).collect();
-        let groups = colour_cells(&cells, 141);
+        let groups = colour_blocks(&cells, 141, 1);
         assert_eq!(groups.len(), 70);
         assert!(groups.iter().all(|g| g.len() == 1));
         assert_disjoint(&groups, &cells, 141);

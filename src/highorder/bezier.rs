@@ -22,7 +22,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use super::basis::{scaled_det, tensor_map, Basis1d};
+use super::basis::{jacobians_on_grid, scaled_det, Basis1d};
 use super::{check_nodes, nodes_1d, HighOrderError, Spacing};
 
 /// A polynomial in up to three variables on the box `[0,1]^3` in the
@@ -188,16 +188,30 @@ impl Bezier {
                     .collect()
             })
             .collect();
-        let (a0, a1) = (self.len(0), self.len(1));
-        let (b0, b1) = (other.len(0), other.len(1));
+        let [a0, a1, a2] = std::array::from_fn(|d| self.len(d));
+        let [b0, b1, b2] = std::array::from_fn(|d| other.len(d));
         let (c0, c1) = (deg[0] + 1, deg[1] + 1);
         let mut coef = vec![0.0; c0 * c1 * (deg[2] + 1)];
-        for (ia, &ca) in self.coef.iter().enumerate() {
-            let (i0, i1, i2) = (ia % a0, ia / a0 % a1, ia / (a0 * a1));
-            for (ib, &cb) in other.coef.iter().enumerate() {
-                let (j0, j1, j2) = (ib % b0, ib / b0 % b1, ib / (b0 * b1));
-                let wt = w[0][i0][j0] * w[1][i1][j1] * w[2][i2][j2];
-                coef[(i0 + j0) + c0 * ((i1 + j1) + c1 * (i2 + j2))] += wt * ca * cb;
+        // nested loops in storage order (no index division in the hot
+        // loop); the arithmetic and its order are those of the plain
+        // double loop over coefficient pairs
+        let mut ca = self.coef.iter();
+        for i2 in 0..a2 {
+            for i1 in 0..a1 {
+                for (i0, &ca) in (0..a0).zip(&mut ca) {
+                    let mut cb = other.coef.iter();
+                    for j2 in 0..b2 {
+                        let w2 = w[2][i2][j2];
+                        for j1 in 0..b1 {
+                            let w1 = w[1][i1][j1];
+                            let base = i0 + c0 * ((i1 + j1) + c1 * (i2 + j2));
+                            let out = &mut coef[base..base + b0];
+                            for ((o, &w0), &cb) in out.iter_mut().zip(&w[0][i0]).zip(&mut cb) {
+                                *o += w0 * w1 * w2 * ca * cb;
+                            }
+                        }
+                    }
+                }
             }
         }
         Bezier { deg, coef }
@@ -502,14 +516,7 @@ fn certify<const D: usize>(
     };
     let mut min_det = f64::INFINITY;
     let mut min_sj = f64::INFINITY;
-    for a in 0..m.pow(D as u32) {
-        let mut rest = a;
-        let xi: [f64; D] = std::array::from_fn(|_| {
-            let i = rest % m;
-            rest /= m;
-            i as f64 / (m - 1) as f64
-        });
-        let (_, j) = tensor_map(&basis, ctrl, xi);
+    for j in jacobians_on_grid(&basis, ctrl, m) {
         min_det = min_det.min(super::basis::det(&j));
         min_sj = min_sj.min(scaled_det(&j));
     }
@@ -568,7 +575,7 @@ pub fn certify_hex_with(
 
 #[cfg(test)]
 mod tests {
-    use super::super::basis::{det, reference_nodes};
+    use super::super::basis::{det, reference_nodes, tensor_map};
     use super::*;
 
     /// A deterministic pseudo-random sequence in [-1, 1].
