@@ -57,7 +57,15 @@ pub enum CurveError {
     Subdivide(#[from] crate::deform::refine::SubdivideError),
     /// Algorithm 2 failed (a tangle, an unreachable target, ...).
     #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {0}")]
-    Deform(#[from] DeformError),
+    Deform(DeformError),
+}
+
+// By hand, not `#[from]`: that would also make the DeformError the source,
+// and a chain printer (anyhow's `{:#}`) would then print its text twice.
+impl From<DeformError> for CurveError {
+    fn from(e: DeformError) -> Self {
+        CurveError::Deform(e)
+    }
 }
 
 /// The figures of a curved mesh.
@@ -336,4 +344,17 @@ pub fn sampled_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryP
         })
         .reduce(|| 0.0, f64::max);
     Ok(worst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tangle_in_algorithm_2_is_said_once() {
+        let e = CurveError::from(DeformError::Tangled { t: 0.5, dt: 1e-3, cells: vec![3] });
+        let chain = format!("{:#}", anyhow::Error::from(e));
+        assert_eq!(chain.matches("tangles").count(), 1, "{chain}");
+        assert!(chain.starts_with("Algorithm 2 (carrying"), "{chain}");
+    }
 }
