@@ -87,7 +87,8 @@ pub struct CurvedQuality {
     /// Smallest and largest per-element minimum scaled Jacobian (sampled on
     /// a (3p+1)^d grid).
     pub scaled_jacobian: crate::quality::Range,
-    /// Elements whose det J is not certified positive.
+    /// Elements whose det J is not certified positive: 0-based indices
+    /// (the `quality` command turns them into the file's element tags).
     pub invalid_elements: Vec<usize>,
     /// Largest distance of a boundary node of a curved part to its shape.
     pub boundary_node_distance: f64,
