@@ -214,6 +214,36 @@ impl GeometryFile {
     }
 }
 
+impl GeometryFile {
+    /// Fails for a group this file binds that no boundary element carries
+    /// (`carried[i]`: part `i` of `names` has elements): a physical name
+    /// in the mesh that no entity has elements for, which binding would
+    /// silently ignore.
+    pub fn check_carried(&self, names: &[String], carried: &[bool], file: &str) -> Result<(), CaseError> {
+        for (k, g) in self.group.iter().enumerate() {
+            if names.iter().zip(carried).any(|(n, &c)| *n == g.name && !c) {
+                let message = format!(
+                    "group[{k}] (`{}`): the mesh names this physical group, but no boundary element carries it (no entity of the group has elements); check the group in Gmsh",
+                    g.name
+                );
+                return Err(CaseError { file: file.to_string(), message });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Per part, whether any boundary element carries it.
+pub fn carried(parts: impl Iterator<Item = usize>, count: usize) -> Vec<bool> {
+    let mut c = vec![false; count];
+    for p in parts {
+        if let Some(x) = c.get_mut(p) {
+            *x = true;
+        }
+    }
+    c
+}
+
 /// The shape of a group: a curve or surface spec, or a level set.
 fn shape_of<const D: usize>(g: &GroupSpec) -> Result<Option<Arc<dyn BoundaryShape<D>>>, String> {
     match (&g.shape, &g.level_set) {
@@ -301,5 +331,17 @@ mod tests {
         let e = bad.parts::<2>(&names, "g.toml").unwrap_err().to_string();
         assert!(e.contains("line 4") && e.contains("radius"), "{e}");
         assert!(GeometryFile::parse("[[group]]\nname = \"wall\"\nkind = \"bend\"\n", "g.toml").unwrap_err().to_string().contains("unknown variant"));
+    }
+
+    #[test]
+    fn a_group_no_element_carries_is_an_error_naming_it() {
+        let names = vec!["wall".to_string(), "ghost".to_string()];
+        let c = carried([0usize, 0].into_iter(), 2);
+        assert_eq!(c, [true, false]);
+        let g = GeometryFile::parse("[[group]]\nname = \"ghost\"\nkind = \"fixed\"\n", "g.toml").unwrap();
+        let e = g.check_carried(&names, &c, "g.toml").unwrap_err().to_string();
+        assert!(e.contains("g.toml") && e.contains("`ghost`") && e.contains("no boundary element carries it"), "{e}");
+        let g = GeometryFile::parse("[[group]]\nname = \"wall\"\nkind = \"fixed\"\n", "g.toml").unwrap();
+        g.check_carried(&names, &c, "g.toml").unwrap();
     }
 }

@@ -13,7 +13,7 @@ use crate::highorder::Spacing;
 use crate::io::curved::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
-use crate::io::write_atomic;
+use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
 use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
 use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{render_curved_hex, render_curved_quads};
@@ -47,6 +47,14 @@ pub enum RunError {
     /// Algorithms 2 and 3 failed.
     #[error(transparent)]
     Curve(#[from] CurveError),
+    /// Elements of an input file that are, or became, invalid.
+    #[error("{what}: {} element(s), by their tags in the file: {:?}", tags.len(), &tags[..tags.len().min(20)])]
+    Elements {
+        /// What is wrong with them.
+        what: String,
+        /// Their element tags in the input file.
+        tags: Vec<u64>,
+    },
     /// A picture failed.
     #[error("drawing the picture failed")]
     Render(#[from] RenderError),
@@ -57,21 +65,16 @@ pub enum RunError {
     #[error(transparent)]
     Vtu(#[from] VtuError),
     /// An input file could not be read.
-    #[error("cannot read `{}`: {source}", path.display())]
+    #[error("cannot read `{}`: {cause}", path.display())]
     Read {
         /// The path.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (named so, not `source`, so it is printed once).
+        cause: std::io::Error,
     },
-    /// The output folder could not be written.
-    #[error("cannot write `{}`", path.display())]
-    Write {
-        /// The path.
-        path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
-    },
+    /// The output folder cannot take the files.
+    #[error(transparent)]
+    Folder(#[from] FolderError),
 }
 
 impl RunError {
@@ -80,6 +83,7 @@ impl RunError {
         match self {
             RunError::Invalid(_)
             | RunError::InvalidCurved { .. }
+            | RunError::Elements { .. }
             | RunError::Deform(DeformError::Tangled { .. })
             | RunError::Deform(DeformError::InvalidStart(_))
             | RunError::Curve(CurveError::InvalidCoarse(_))
@@ -320,6 +324,10 @@ fn options3(look: &Look<3>) -> RenderOptions3 {
     opts
 }
 
+/// The report of `deformesh run`; its `outputs` list tells a rerun into the
+/// same folder which files are an earlier run's.
+pub const REPORT: &str = "report.json";
+
 /// Runs a prepared 2D or 3D case; writes into `out_dir` only on success.
 pub fn run_any(setup: AnySetup, out_dir: &Path, progress: impl FnMut(Progress)) -> Result<Report, RunError> {
     match setup {
@@ -335,6 +343,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     mut progress: impl FnMut(Progress),
 ) -> Result<Report, RunError> {
     let clock = Instant::now();
+    check_run_folder(out_dir, REPORT)?;
     let Setup { name, mesh, parts, field, options, output, highorder } = setup;
     let nominal_steps = options.steps;
     let integrator = options.integrator;
@@ -463,12 +472,12 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
             definitions: "det J of the order-p Lagrange map from the reference [0,1]^d (Gmsh's [-1,1]^d gives 2^-d of it): min_det_j is a certified lower bound from Bezier coefficients with subdivision, min_det_j_attained a value det J takes; scaled Jacobian det J/(product of column norms of J), per element its minimum on a (3p+1)^d grid; boundary distances to the exact shapes of moving (and curved slip) parts, at the nodes and at samples of the curved boundary",
         }),
         time: Timings { assembly_s: stats.assembly.as_secs_f64(), analyze_s: stats.analyze.as_secs_f64(), factor_s: stats.factor.as_secs_f64(), solve_s: stats.solve.as_secs_f64(), total_s: 0.0 },
-        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once("report.json".to_string())).collect(),
+        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(REPORT.to_string())).collect(),
     };
     report.time.total_s = clock.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report).expect("report serialises");
-    files.push(("report.json".into(), json.into_bytes()));
-    write_all(out_dir, &files)?;
+    files.push((REPORT.into(), json.into_bytes()));
+    write_set(out_dir, &files, REPORT)?;
     Ok(report)
 }
 
@@ -495,28 +504,6 @@ fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a [[f64; D]]>) 
         }
     }
     (lo, hi)
-}
-
-/// Creates the folder and writes every file: first all under temporary
-/// names (removed again if any write fails), then renamed into place, so
-/// a failure leaves no partial set of outputs.
-fn write_all(out_dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), RunError> {
-    let fail = |path: PathBuf| move |source| RunError::Write { path, source };
-    std::fs::create_dir_all(out_dir).map_err(fail(out_dir.to_path_buf()))?;
-    let staged: Vec<(PathBuf, PathBuf)> = files
-        .iter()
-        .map(|(name, _)| (out_dir.join(format!(".{name}.staged-{}", std::process::id())), out_dir.join(name)))
-        .collect();
-    for (k, ((tmp, _), (_, bytes))) in staged.iter().zip(files).enumerate() {
-        if let Err(e) = write_atomic(tmp, bytes) {
-            staged[..k].iter().for_each(|(t, _)| drop(std::fs::remove_file(t)));
-            return Err(fail(tmp.clone())(e));
-        }
-    }
-    for (tmp, path) in &staged {
-        std::fs::rename(tmp, path).map_err(fail(path.clone()))?;
-    }
-    Ok(())
 }
 
 /// What `deformesh curve` is asked to do.
@@ -570,21 +557,52 @@ pub struct CurveReport {
 /// Algorithms 2 and 3, and writes the curved mesh (MSH, VTU, PNG, report)
 /// only if every element is certified valid.
 pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
-    let bytes = std::fs::read(&job.input).map_err(|source| RunError::Read { path: job.input.clone(), source })?;
+    check_output_file(&job.output)?;
+    let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
     let text = crate::io::msh::msh_text(&bytes)?;
     let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
+    let fine_cells = |d: u32| job.options.order.max(1).pow(d);
     match crate::io::msh::cell_type_of(&text) {
         Some((3, _)) => {
-            let mesh = crate::io::msh::parse_hex_msh(&text)?;
+            let (mesh, tags) = crate::io::msh::parse_hex_msh_tagged(&text)?;
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job, &mut progress)
+            geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
+            curve_mesh(&mesh, &parts, unbound, job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(3)))
         }
         _ => {
-            let mesh = crate::io::msh::parse_msh(&text)?;
+            let (mesh, tags) = crate::io::msh::parse_msh_tagged(&text)?;
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job, &mut progress)
+            geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
+            curve_mesh(&mesh, &parts, unbound, job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(2)))
         }
+    }
+}
+
+/// An error that lists cells, with the cells named by the input file's
+/// element tags instead of 0-based indices. Algorithm 2 runs on the cells
+/// subdivided `per_cell` times (p^d): its cells are mapped to the element
+/// they split.
+fn by_tag(e: RunError, tags: &[u64], per_cell: usize) -> RunError {
+    let to_tags = |cells: &[usize], per: usize| {
+        let mut v: Vec<u64> = cells.iter().filter_map(|&c| tags.get(c / per).copied()).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    match e {
+        RunError::Curve(CurveError::InvalidCoarse(cells)) => {
+            RunError::Elements { what: "the mesh to be curved already has invalid cells (det J not positive at a corner)".into(), tags: to_tags(&cells, 1) }
+        }
+        RunError::InvalidCurved { order, cells, min_det } => RunError::Elements {
+            what: format!("the curved mesh of order {order} has elements not certified valid (det J not positive over the whole element; certified min det J {min_det:.3e})"),
+            tags: to_tags(&cells, 1),
+        },
+        RunError::Curve(CurveError::Deform(DeformError::Tangled { t, dt, cells })) => RunError::Elements {
+            what: format!("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): the mesh tangles at t = {t:.4} even with step {dt:.3e}"),
+            tags: to_tags(&cells, per_cell),
+        },
+        other => other,
     }
 }
 
@@ -638,6 +656,6 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     };
     report.total_s = clock.elapsed().as_secs_f64();
     files.push((format!("{stem}.report.json"), serde_json::to_string_pretty(&report).expect("report serialises").into_bytes()));
-    write_all(&dir, &files)?;
+    write_set(&dir, &files, &format!("{stem}.report.json"))?;
     Ok(report)
 }

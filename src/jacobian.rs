@@ -18,13 +18,14 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum JacobianError {
     /// g is zero, negative or not finite somewhere the mesh reaches.
-    #[error("prescribed Jacobian is not positive: g = {value} at (x, y, z) = ({:.6}, {:.6}, {:.6}), t = {t:.4}", x[0], x[1], x[2])]
+    #[error("prescribed Jacobian is not positive: the field is {} at (x, y, z) = ({:.6}, {:.6}, {:.6}), t = {t:.4}", signed(*value), x[0], x[1], x[2])]
     NotPositive {
         /// The point (z = 0 in 2D).
         x: Point3,
         /// The pseudo-time.
         t: f64,
-        /// The value found.
+        /// The value the user's field has there, before any floor (for a
+        /// field without t, its value at t = 1: the target g₁).
         value: f64,
     },
     /// The image could not be read or decoded.
@@ -428,9 +429,20 @@ impl JacobianField {
     pub fn g_checked(&self, x: Point3, t: f64) -> Result<(f64, f64), JacobianError> {
         let (g, gt) = self.g_and_dt(x, t);
         if !(g > 0.0 && g.is_finite() && gt.is_finite()) {
-            return Err(JacobianError::NotPositive { x, t, value: g });
+            return Err(JacobianError::NotPositive { x, t, value: self.user_value(x, t) });
         }
         Ok((g, gt))
+    }
+
+    /// What the user's field gives at x: the expression in t at t, else
+    /// the target g₁. Not g itself: the floor (0 by default) would show a
+    /// negative field as 0, and on the path 0·∞ at t = 0 an infinite one
+    /// as NaN.
+    fn user_value(&self, x: Point3, t: f64) -> f64 {
+        match self.time_dependent_expr() {
+            Some(e) => e.eval(&[x[0], x[1], x[2], t]),
+            None => self.target.value(x),
+        }
     }
 }
 
@@ -456,6 +468,12 @@ impl Normalisation {
     pub fn f(&self, field: &JacobianField, x: Point3) -> f64 {
         self.c * field.g_and_dt(x, self.t).0
     }
+}
+
+/// A value for a message: infinities signed (`+inf`), as a user thinks of
+/// `1/abs(x - 0.5)` at x = 0.5.
+fn signed(v: f64) -> String {
+    if v == f64::INFINITY { "+inf".into() } else { v.to_string() }
 }
 
 /// A point in 2D or 3D as a point in space (z = 0 in 2D).
@@ -569,6 +587,22 @@ mod tests {
         let err = normalise2(&mesh, &f, 1.0, &vec![[0.0; 2]; 25]).unwrap_err();
         let msg = err.to_string();
         assert!(msg.contains("not positive") && msg.contains("t = 1.0000"), "{msg}");
+    }
+
+    #[test]
+    fn a_bad_field_is_reported_with_the_users_value() {
+        // the default floor 0 made g = 0 out of −0.5
+        let f = JacobianField::expression(expr("x - 0.5"));
+        let msg = f.g_checked([0.0, 0.3, 0.0], 1.0).unwrap_err().to_string();
+        assert!(msg.contains("the field is -0.5 at"), "{msg}");
+        // the path (1 − t) + t·g₁ made NaN out of +inf at t = 0
+        let f = JacobianField::expression(expr("1/abs(x - 0.5)"));
+        let msg = f.g_checked([0.5, 0.3, 0.0], 0.0).unwrap_err().to_string();
+        assert!(msg.contains("the field is +inf at") && !msg.contains("NaN"), "{msg}");
+        // an expression in t: its own value at that t
+        let f = JacobianField::expression(expr("1 - 2*t"));
+        let msg = f.g_checked([0.0, 0.0, 0.0], 1.0).unwrap_err().to_string();
+        assert!(msg.contains("the field is -1 at") && msg.contains("t = 1.0000"), "{msg}");
     }
 
     #[test]

@@ -1,12 +1,13 @@
 //! The `deformesh` command line: only argument handling and progress
 //! display; all work is done by the library.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Parser, Subcommand};
 use deformesh::case::{Case, DEMO_CASE};
 use deformesh::case::AnySetup;
 use deformesh::deform::SolverChoice;
-use deformesh::driver::{run_any, Progress, RunError};
+use deformesh::driver::{run_any, Progress, RunError, REPORT};
+use deformesh::io::folder::check_run_folder;
 use deformesh::highorder::curve::{certify_mesh, CurvedQuality};
 use deformesh::io::msh::MshError;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -14,7 +15,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
-#[command(name = "deformesh", version, about = "Curved, boundary-conforming quad meshes by the deformation method")]
+#[command(name = "deformesh", version, about = "Curved, boundary-conforming quad and hex meshes by the deformation method")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -95,6 +96,7 @@ fn main() {
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
         .with_writer(std::io::stderr)
         .init();
+    deformesh::io::folder::install_interrupt_handler();
     let code = match run(Cli::parse()) {
         Ok(()) => 0,
         Err(e) => {
@@ -116,11 +118,13 @@ fn run(cli: Cli) -> Result<()> {
                 AnySetup::Hex(s) => s.name.clone(),
             };
             let out = out.unwrap_or_else(|| Path::new("out").join(folder_name(&name)));
-            run_and_print(setup, &out).with_context(|| case.display().to_string())
+            check_run_folder(&out, REPORT)?;
+            run_and_print(setup, &out, &case.display().to_string())
         }
         Command::Demo { out } => {
+            check_run_folder(&out, REPORT)?;
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
-            run_and_print(setup, &out).context("<built-in demo>")
+            run_and_print(setup, &out, "<built-in demo>")
         }
         Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, out } => {
             deformesh::highorder::check_order(order).map_err(|e| anyhow::anyhow!("--order: {e}"))?;
@@ -135,9 +139,10 @@ fn run(cli: Cli) -> Result<()> {
             let solver = solver_choice(&solver)?;
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, flow, ..Default::default() };
+            deformesh::io::folder::check_output_file(&out)?;
             let job = deformesh::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
             let bar = Bar::new();
-            let r = deformesh::driver::curve_file(&job, |p| bar.update(p)).map_err(anyhow::Error::from).with_context(|| mesh.display().to_string());
+            let r = deformesh::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
             bar.finish();
             let r = r?;
             for g in &r.unbound_groups {
@@ -202,10 +207,20 @@ fn solver_choice(name: &str) -> Result<SolverChoice> {
     serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cg or amg, got `{name}`"))
 }
 
-fn run_and_print(setup: AnySetup, out: &Path) -> Result<()> {
+/// An error of a run, prefixed by the input it comes from, except an output
+/// folder's error: that names its own path and is no fault of the input.
+fn blame(e: RunError, input: &str) -> anyhow::Error {
+    match e {
+        RunError::Folder(_) => e.into(),
+        other => anyhow::Error::from(other).context(input.to_string()),
+    }
+}
+
+fn run_and_print(setup: AnySetup, out: &Path, input: &str) -> Result<()> {
     let bar = Bar::new();
-    let report = run_any(setup, out, |p| bar.update(p)).map_err(anyhow::Error::from)?;
+    let report = run_any(setup, out, |p| bar.update(p)).map_err(|e| blame(e, input));
     bar.finish();
+    let report = report?;
     println!("case {}: {} cells, {} nodes, {} steps ({} halved)", report.case, report.cells, report.nodes, report.steps, report.halved_steps);
     print!("{}", deformesh::quality::format_quality(&report.quality));
     println!(
@@ -305,30 +320,46 @@ fn format_curved(q: &CurvedQuality) -> String {
     )
 }
 
-/// Quality figures of a linear or high-order quad or hex MSH file.
+/// Quality figures of a linear or high-order quad or hex MSH file, with
+/// invalid cells named by their element tags in the file.
 fn quality_of(path: &Path) -> Result<Figures> {
     use deformesh::io::curved::CurvedMesh;
     let named = |e: MshError| match e {
         MshError::Io { .. } => anyhow::Error::from(e),
         other => anyhow::Error::from(other).context(path.display().to_string()),
     };
-    let curved = |q: Result<(Vec<deformesh::highorder::Certificate>, CurvedQuality), deformesh::highorder::HighOrderError>| -> Result<Figures> {
-        Ok(Figures::Curved(q.map_err(anyhow::Error::from)?.1))
-    };
-    let text = std::fs::read(path).ok().and_then(|b| deformesh::io::msh::msh_text(&b).ok()).unwrap_or_default();
+    let bytes = std::fs::read(path).map_err(|e| named(MshError::Io { path: path.to_path_buf(), source: e }))?;
+    let text = deformesh::io::msh::msh_text(&bytes).map_err(named)?;
     match deformesh::io::msh::cell_type_of(&text) {
-        Some((2, 10 | 36 | 37)) => curved(certify_mesh(&CurvedMesh::<2>::read_msh(path).map_err(named)?)),
-        Some((3, 12 | 92 | 93)) => curved(certify_mesh(&CurvedMesh::<3>::read_msh(path).map_err(named)?)),
-        _ => Ok(Figures::Linear(linear_quality_of(path).map_err(named)?)),
+        Some((2, 10 | 36 | 37)) => curved_figures(CurvedMesh::<2>::parse_msh_tagged(&text).map_err(named)?),
+        Some((3, 12 | 92 | 93)) => curved_figures(CurvedMesh::<3>::parse_msh_tagged(&text).map_err(named)?),
+        _ => Ok(Figures::Linear(linear_quality_of(&text).map_err(named)?)),
     }
 }
 
-/// Quality figures of a linear quad or hex MSH file (hexes when it has any).
-fn linear_quality_of(path: &Path) -> Result<deformesh::quality::MeshQuality, MshError> {
-    use deformesh::io::msh::{read_hex_msh, read_msh};
-    match read_msh(path) {
-        Ok(m) => Ok(deformesh::quality::mesh_quality(&m)),
-        Err(MshError::UnknownElementType { element_type: 5, .. }) => Ok(deformesh::quality::hex_mesh_quality(&read_hex_msh(path)?)),
-        Err(e) => Err(e),
-    }
+/// The figures of a curved mesh read with its element tags.
+fn curved_figures<const D: usize>((mesh, tags): (deformesh::io::curved::CurvedMesh<D>, Vec<u64>)) -> Result<Figures> {
+    let mut q = certify_mesh(&mesh).map_err(anyhow::Error::from)?.1;
+    q.invalid_elements = to_tags(&q.invalid_elements, &tags);
+    Ok(Figures::Curved(q))
+}
+
+/// Cell indices as the file's element tags.
+fn to_tags(cells: &[usize], tags: &[u64]) -> Vec<usize> {
+    cells.iter().map(|&c| tags.get(c).map_or(c, |&t| t as usize)).collect()
+}
+
+/// Quality figures of a linear quad or hex MSH text (hexes when it has any).
+fn linear_quality_of(text: &str) -> Result<deformesh::quality::MeshQuality, MshError> {
+    use deformesh::io::msh::{parse_hex_msh_tagged, parse_msh_tagged};
+    let (mut q, tags) = match parse_msh_tagged(text) {
+        Ok((m, tags)) => (deformesh::quality::mesh_quality(&m), tags),
+        Err(MshError::UnknownElementType { element_type: 5, .. }) => {
+            let (m, tags) = parse_hex_msh_tagged(text)?;
+            (deformesh::quality::hex_mesh_quality(&m), tags)
+        }
+        Err(e) => return Err(e),
+    };
+    q.invalid_cells = to_tags(&q.invalid_cells, &tags);
+    Ok(q)
 }

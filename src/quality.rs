@@ -106,7 +106,8 @@ pub struct MeshQuality {
     pub det_j: Range,
     /// Per-cell minimum scaled Jacobian (corner-angle sine), over cells.
     pub scaled_jacobian: Range,
-    /// Cells whose det J is not positive somewhere.
+    /// Cells whose det J is not positive somewhere: 0-based indices (the
+    /// `quality` command turns them into the file's element tags).
     pub invalid_cells: Vec<usize>,
     /// Smallest and largest cell size (area in 2D, volume in 3D).
     pub cell_size: Range,

@@ -427,3 +427,215 @@ fn curve_bad_arguments_are_clean_errors() {
     }
     assert!(!dir.path().join("out").exists());
 }
+
+// ------------------------------------------------------------ the output folder
+
+/// `deformesh run case.toml -o out` started in the background, with the
+/// debug-build pause after each staged file and rename.
+fn spawn_run(dir: &Path, case: &str, pause_ms: u64) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_deformesh"))
+        .args(["run", case, "-o", "out"])
+        .current_dir(dir)
+        .env_remove("RUST_LOG")
+        .env("DEFORMESH_TEST_WRITE_PAUSE_MS", pause_ms.to_string())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("cannot start deformesh")
+}
+
+/// Waits until a staged file shows in `out` (the run is writing).
+fn wait_for_staging(out: &Path) {
+    let start = std::time::Instant::now();
+    while start.elapsed().as_secs() < 120 {
+        if out.is_dir() && files_in(out).iter().any(|f| f.contains(".staged-")) {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    panic!("the run never started writing");
+}
+
+/// The files a report says were written, sorted.
+fn listed_outputs(out: &Path) -> Vec<String> {
+    let mut v: Vec<String> = read_json(&out.join("report.json"))["outputs"].as_array().unwrap().iter().map(|v| v.as_str().unwrap().to_string()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn an_output_folder_that_is_a_file_fails_before_computing() {
+    let dir = TempDir::new().unwrap();
+    write_case(dir.path(), SMALL);
+    std::fs::write(dir.path().join("out"), "a file").unwrap();
+    let ran = deformesh(dir.path(), &["run", CASE, "-o", "out"]);
+    assert_clean_failure(&ran, dir.path(), &["output folder `out`", "is a file"], &[CASE, "out"]);
+    // neither blamed on the case file nor found after computing
+    assert!(!ran.stderr.contains(CASE) && !ran.stderr.contains("algorithm 1"), "{}", ran.stderr);
+    // `curve -o` naming a folder: at once too, not blamed on the mesh
+    std::fs::write(dir.path().join("geo.toml"), WALL).unwrap();
+    std::fs::create_dir(dir.path().join("dir.msh")).unwrap();
+    let cyl = cylinder();
+    let ran = deformesh(dir.path(), &["curve", path_str(&cyl), "--geometry", "geo.toml", "-o", "dir.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["output `dir.msh` is a folder"], &[CASE, "out", "geo.toml", "dir.msh"]);
+    assert!(!ran.stderr.contains("cylinder") && !ran.stderr.contains("algorithm 2"), "{}", ran.stderr);
+}
+
+#[test]
+fn a_rerun_removes_the_earlier_runs_frames_and_a_foreign_folder_is_refused() {
+    let dir = TempDir::new().unwrap();
+    let with_frames = format!("{SMALL}\n[output]\nframes = [0.0, 1.0]\nanimation = true\n");
+    write_case(dir.path(), &with_frames);
+    assert_eq!(deformesh(dir.path(), &["run", CASE, "-o", "out"]).code, Some(0));
+    let out = dir.path().join("out");
+    assert!(files_in(&out).contains(&"deformation.gif".to_string()));
+    write_case(dir.path(), SMALL);
+    let ran = deformesh(dir.path(), &["run", CASE, "-o", "out"]);
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+    assert_eq!(files_in(&out), ["mesh.msh", "mesh.png", "mesh.vtu", "report.json"]);
+    // a folder with someone's files and no report is not ours to fill
+    let theirs = dir.path().join("theirs");
+    std::fs::create_dir(&theirs).unwrap();
+    std::fs::write(theirs.join("notes.txt"), "mine").unwrap();
+    let ran = deformesh(dir.path(), &["run", CASE, "-o", "theirs"]);
+    assert_eq!(ran.code, Some(1), "{}", ran.stderr);
+    assert!(ran.stderr.contains("`theirs` is not empty") && ran.stderr.contains("notes.txt"), "{}", ran.stderr);
+    assert_eq!(files_in(&theirs), ["notes.txt"]);
+}
+
+#[test]
+fn a_failed_write_leaves_no_staged_files() {
+    let dir = TempDir::new().unwrap();
+    write_case(dir.path(), SMALL);
+    assert_eq!(deformesh(dir.path(), &["run", CASE, "-o", "out"]).code, Some(0));
+    // a folder where mesh.png goes: the write fails after staging
+    let out = dir.path().join("out");
+    std::fs::remove_file(out.join("mesh.png")).unwrap();
+    std::fs::create_dir(out.join("mesh.png")).unwrap();
+    std::fs::write(out.join("mesh.png").join("x"), "x").unwrap();
+    let ran = deformesh(dir.path(), &["run", CASE, "-o", "out"]);
+    assert_eq!(ran.code, Some(1), "{}", ran.stderr);
+    assert!(ran.stderr.contains("mesh.png") && !ran.stderr.contains("panicked"), "{}", ran.stderr);
+    assert_eq!(files_in(&out), ["mesh.msh", "mesh.png", "mesh.vtu", "report.json"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_during_the_write_leaves_nothing() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = TempDir::new().unwrap();
+    write_case(dir.path(), SMALL);
+    let child = spawn_run(dir.path(), CASE, 300);
+    wait_for_staging(&dir.path().join("out"));
+    // SAFETY: signalling our own child process
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let done = child.wait_with_output().unwrap();
+    assert_eq!(done.status.signal(), Some(libc::SIGINT), "{}", String::from_utf8_lossy(&done.stderr));
+    assert_eq!(files_in(dir.path()), [CASE], "the folder this run created is gone too");
+}
+
+#[test]
+fn two_runs_into_one_folder_do_not_mix_their_files() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("a.toml"), SMALL).unwrap();
+    let b = edit(SMALL, "cells = [6, 6]", "cells = [8, 8]");
+    std::fs::write(dir.path().join("b.toml"), format!("{b}\n[output]\nframes = [0.0, 1.0]\n")).unwrap();
+    // a writes slowly; b starts while a is writing and must wait for it
+    let a = spawn_run(dir.path(), "a.toml", 250);
+    let out = dir.path().join("out");
+    wait_for_staging(&out);
+    let b = spawn_run(dir.path(), "b.toml", 0);
+    for child in [a, b] {
+        let done = child.wait_with_output().unwrap();
+        assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    }
+    // the folder is one run's set: b's, the later writer
+    assert_eq!(files_in(&out), listed_outputs(&out));
+    assert_eq!(read_json(&out.join("report.json"))["cells"], 64);
+    assert!(files_in(&out).contains(&"frame_t1.00.png".to_string()));
+    let q = deformesh(dir.path(), &["quality", "out/mesh.msh", "--json"]);
+    assert_eq!(read_json_text(&q.stdout)["cells"], 64, "{}", q.stdout);
+}
+
+fn read_json_text(text: &str) -> Value {
+    serde_json::from_str(text).expect("valid JSON")
+}
+
+// ------------------------------------------------------------ messages
+
+/// A 2×2 box as MSH text; cell `c` is element `8 + c + 1` in it.
+fn box_msh() -> String {
+    deformesh::io::msh::msh_string(&deformesh::mesh::QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 2, 2))
+}
+
+#[test]
+fn invalid_cells_are_named_by_their_element_tags() {
+    let dir = TempDir::new().unwrap();
+    let text = box_msh();
+    // turn cell 2 (element 11) inside out: swap two of its nodes
+    let line = text.lines().find(|l| l.starts_with("11 ")).expect("element 11").to_string();
+    let f: Vec<&str> = line.split_whitespace().collect();
+    let swapped = format!("{} {} {} {} {}", f[0], f[2], f[1], f[3], f[4]);
+    std::fs::write(dir.path().join("bad.msh"), text.replacen(&line, &swapped, 1)).unwrap();
+    let q = deformesh(dir.path(), &["quality", "bad.msh"]);
+    assert_eq!(q.code, Some(2), "{}", q.stderr);
+    assert!(q.stdout.contains("invalid cells: 1 [11]"), "{}", q.stdout);
+    std::fs::write(dir.path().join("geo.toml"), "[[group]]\nname = \"top\"\nkind = \"fixed\"\n").unwrap();
+    let ran = deformesh(dir.path(), &["curve", "bad.msh", "--geometry", "geo.toml", "--order", "2", "-o", "c.msh"]);
+    assert_eq!(ran.code, Some(2), "{}", ran.stderr);
+    assert!(ran.stderr.contains("already has invalid cells") && ran.stderr.contains("by their tags in the file: [11]"), "{}", ran.stderr);
+}
+
+#[test]
+fn a_bound_group_that_no_element_carries_is_an_error() {
+    let dir = TempDir::new().unwrap();
+    let text = std::fs::read_to_string(cylinder()).unwrap();
+    let ghost = text.replacen("$PhysicalNames\n3\n", "$PhysicalNames\n4\n1 7 \"ghost\"\n", 1);
+    assert_ne!(ghost, text);
+    std::fs::write(dir.path().join("cyl.msh"), ghost).unwrap();
+    std::fs::write(dir.path().join("geo.toml"), format!("{WALL}[[group]]\nname = \"ghost\"\nkind = \"fixed\"\n")).unwrap();
+    let ran = deformesh(dir.path(), &["curve", "cyl.msh", "--geometry", "geo.toml", "--order", "2", "-o", "c.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["geo.toml", "`ghost`", "no boundary element carries it"], &["cyl.msh", "geo.toml"]);
+}
+
+#[test]
+fn triangles_are_refused_with_the_gmsh_recipe() {
+    let dir = TempDir::new().unwrap();
+    let tri = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
+    std::fs::write(dir.path().join("tri.msh"), tri).unwrap();
+    let ran = deformesh(dir.path(), &["quality", "tri.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["tri.msh", "element type 2", "not supported yet", "Mesh.RecombineAll = 1;", "Mesh.SubdivisionAlgorithm"], &["tri.msh"]);
+}
+
+#[test]
+fn a_garbage_file_is_not_echoed() {
+    let dir = TempDir::new().unwrap();
+    let garbage: Vec<u8> = (0..4000u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+    std::fs::write(dir.path().join("junk.msh"), &garbage).unwrap();
+    std::fs::write(dir.path().join("geo.toml"), WALL).unwrap();
+    for args in [vec!["quality", "junk.msh"], vec!["curve", "junk.msh", "--geometry", "geo.toml", "-o", "c.msh"]] {
+        let ran = deformesh(dir.path(), &args);
+        assert_clean_failure(&ran, dir.path(), &["junk.msh"], &["junk.msh", "geo.toml"]);
+        let printable = |c: char| c == '\n' || (' '..='~').contains(&c) || "²³·φ∂∇≤≥−…".contains(c);
+        assert!(ran.stderr.chars().all(printable), "raw bytes echoed:\n{:?}", ran.stderr);
+        assert!(ran.stderr.len() < 600, "{}", ran.stderr);
+    }
+}
+
+#[test]
+fn a_missing_mesh_is_said_once() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("geo.toml"), WALL).unwrap();
+    let ran = deformesh(dir.path(), &["curve", "missing.msh", "--geometry", "geo.toml", "-o", "c.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["missing.msh"], &["geo.toml"]);
+    let cause = ran.stderr.trim().rsplit(": ").next().unwrap().to_string();
+    assert_eq!(ran.stderr.matches(cause.as_str()).count(), 1, "repeated cause:\n{}", ran.stderr);
+}
+
+#[test]
+fn the_help_says_quad_and_hex() {
+    let dir = TempDir::new().unwrap();
+    let ran = deformesh(dir.path(), &["--help"]);
+    assert_eq!(ran.code, Some(0));
+    assert!(ran.stdout.contains("quad and hex meshes"), "{}", ran.stdout);
+}

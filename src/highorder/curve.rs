@@ -57,7 +57,15 @@ pub enum CurveError {
     Subdivide(#[from] crate::deform::refine::SubdivideError),
     /// Algorithm 2 failed (a tangle, an unreachable target, ...).
     #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {0}")]
-    Deform(#[from] DeformError),
+    Deform(DeformError),
+}
+
+// By hand, not `#[from]`: that would also make the DeformError the source,
+// and a chain printer (anyhow's `{:#}`) would then print its text twice.
+impl From<DeformError> for CurveError {
+    fn from(e: DeformError) -> Self {
+        CurveError::Deform(e)
+    }
 }
 
 /// The figures of a curved mesh.
@@ -79,7 +87,8 @@ pub struct CurvedQuality {
     /// Smallest and largest per-element minimum scaled Jacobian (sampled on
     /// a (3p+1)^d grid).
     pub scaled_jacobian: crate::quality::Range,
-    /// Elements whose det J is not certified positive.
+    /// Elements whose det J is not certified positive: 0-based indices
+    /// (the `quality` command turns them into the file's element tags).
     pub invalid_elements: Vec<usize>,
     /// Largest distance of a boundary node of a curved part to its shape.
     pub boundary_node_distance: f64,
@@ -336,4 +345,17 @@ pub fn sampled_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryP
         })
         .reduce(|| 0.0, f64::max);
     Ok(worst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tangle_in_algorithm_2_is_said_once() {
+        let e = CurveError::from(DeformError::Tangled { t: 0.5, dt: 1e-3, cells: vec![3] });
+        let chain = format!("{:#}", anyhow::Error::from(e));
+        assert_eq!(chain.matches("tangles").count(), 1, "{chain}");
+        assert!(chain.starts_with("Algorithm 2 (carrying"), "{chain}");
+    }
 }

@@ -553,6 +553,15 @@ impl<const D: usize> CurvedMesh<D> {
         let raw = parse_raw(text, D)?;
         raw.into_mesh()
     }
+
+    /// [`CurvedMesh::parse_msh`], with the element tag of every cell in the
+    /// file (cell `c` is element `tags[c]`), for messages.
+    pub fn parse_msh_tagged(text: &str) -> Result<(CurvedMesh<D>, Vec<u64>), MshError> {
+        let raw = parse_raw(text, D)?;
+        let mut tags: Vec<u64> = raw.cells.iter().map(|c| c.0).collect();
+        tags.sort_unstable();
+        Ok((raw.into_mesh()?, tags))
+    }
 }
 
 // ---------------------------------------------------------------- reading

@@ -10,6 +10,7 @@ macro_rules! put {
 }
 
 pub mod curved;
+pub mod folder;
 pub mod msh;
 pub mod msh_binary;
 pub mod vtu;

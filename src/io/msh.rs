@@ -56,7 +56,7 @@ pub enum MshError {
         expected: String,
     },
     /// A token did not have the expected form.
-    #[error("line {line}: expected {expected}, found `{found}`")]
+    #[error("line {line}: expected {expected}, found {}", shown(found, "`"))]
     Syntax {
         /// Line of the token.
         line: usize,
@@ -66,7 +66,7 @@ pub enum MshError {
         found: String,
     },
     /// A version other than 4.1 (e.g. MSH 2.2).
-    #[error("line {line}: MSH version {version} is not supported: {RESAVE_HINT}")]
+    #[error("line {line}: MSH version {} is not supported: {RESAVE_HINT}", shown(version, ""))]
     UnsupportedVersion {
         /// Line of the version number.
         line: usize,
@@ -93,7 +93,7 @@ pub enum MshError {
     },
     /// An element type the reader cannot store (e.g. a triangle, or a hex
     /// in a quad mesh).
-    #[error("line {line}: unsupported element type {element_type} ({accepted})")]
+    #[error("line {line}: unsupported element type {element_type} ({accepted}){}", recombine_hint(*element_type))]
     UnknownElementType {
         /// Line of the element block header.
         line: usize,
@@ -136,6 +136,33 @@ pub enum MshError {
     /// The mesh to write is inconsistent.
     #[error("cannot write mesh: {0}")]
     InvalidMesh(String),
+}
+
+/// A token of the file for a message: quoted, cut to 40 characters, and
+/// never raw bytes: a binary or garbage file would otherwise write control
+/// characters to the user's terminal.
+fn shown(token: &str, quote: &str) -> String {
+    if token.chars().any(|c| c.is_control() || c == char::REPLACEMENT_CHARACTER) {
+        return "bytes that are not text (is this an MSH file?)".into();
+    }
+    match token.char_indices().nth(40) {
+        Some((cut, _)) => format!("{quote}{}…{quote}", &token[..cut]),
+        None => format!("{quote}{token}{quote}"),
+    }
+}
+
+/// For triangles, tetrahedra, prisms and pyramids: what to do instead.
+/// Gmsh makes them by default, so this is the usual first failure.
+fn recombine_hint(element_type: i64) -> &'static str {
+    match element_type {
+        2 | 9 | 20..=25 | 4 | 11 | 29..=33 | 6 | 13 | 18 | 7 | 14 | 19 => {
+            ". Triangles, tetrahedra, prisms and pyramids are not supported yet: deformesh takes quad and hex meshes. \
+             In Gmsh, recombine: for all quads put `Mesh.RecombineAll = 1;` and `Mesh.SubdivisionAlgorithm = 1;` in the .geo file \
+             (or pass `-setnumber Mesh.RecombineAll 1 -setnumber Mesh.SubdivisionAlgorithm 1`), \
+             for all hexes `Mesh.SubdivisionAlgorithm = 2;` (or extrude a quad mesh with `Recombine`); see the README"
+        }
+        _ => "",
+    }
 }
 
 // ---------------------------------------------------------------- writing
@@ -467,6 +494,28 @@ pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
 /// are skipped.
 pub fn parse_msh(text: &str) -> Result<QuadMesh, MshError> {
     parse_raw(text, QUAD_TYPES)?.into_quad_mesh()
+}
+
+/// [`parse_msh`], with the element tag of every cell in the file (cell
+/// `c` is element `tags[c]`): messages name elements as the file does.
+pub fn parse_msh_tagged(text: &str) -> Result<(QuadMesh, Vec<u64>), MshError> {
+    let raw = parse_raw(text, QUAD_TYPES)?;
+    let tags = sorted_tags(raw.quads.iter().map(|q| q.0));
+    Ok((raw.into_quad_mesh()?, tags))
+}
+
+/// [`parse_hex_msh`], with the element tag of every cell in the file.
+pub fn parse_hex_msh_tagged(text: &str) -> Result<(HexMesh, Vec<u64>), MshError> {
+    let raw = parse_raw(text, HEX_TYPES)?;
+    let tags = sorted_tags(raw.hexes.iter().map(|h| h.0));
+    Ok((raw.into_hex_mesh()?, tags))
+}
+
+/// Tags in the order the readers put cells: by tag.
+fn sorted_tags(tags: impl Iterator<Item = u64>) -> Vec<u64> {
+    let mut v: Vec<u64> = tags.collect();
+    v.sort_unstable();
+    v
 }
 
 /// Reads an ASCII MSH 4.1 hex mesh file (see [`parse_hex_msh`]).
@@ -1443,13 +1492,12 @@ mod tests {
         let bad = text.replacen("\n2 1 3 1\n", "\n2 1 2 1\n", 1);
         let line = bad.lines().position(|l| l == "2 1 2 1").unwrap() + 1;
         let msg = parse_hex_msh(&bad).unwrap_err().to_string();
-        assert_eq!(
-            msg,
-            format!(
-                "line {line}: unsupported element type 2 (only linear meshes: 1 = 2-node \
-                 line, 3 = 4-node quad, 5 = 8-node hexahedron, 15 = point)"
-            )
+        let start = format!(
+            "line {line}: unsupported element type 2 (only linear meshes: 1 = 2-node \
+             line, 3 = 4-node quad, 5 = 8-node hexahedron, 15 = point). Triangles, \
+             tetrahedra, prisms and pyramids are not supported yet"
         );
+        assert!(msg.starts_with(&start) && msg.contains("Mesh.RecombineAll = 1;"), "{msg}");
         // a hex naming a node that does not exist
         let bad = text.replacen("\n7 1 2 4 3 5 6 8 7\n", "\n7 1 2 4 3 5 6 8 70\n", 1);
         let msg = parse_hex_msh(&bad).unwrap_err().to_string();

@@ -203,3 +203,22 @@ fn indefinite_matrix_and_bad_structure_are_errors() {
     let bad = Structure { node_ptr: &[0, 1], near_null: &null, count: 1 };
     assert!(matches!(Amg::default().setup(&a, bad), Err(SolveError::Pattern(_))));
 }
+
+#[test]
+fn cg_that_does_not_converge_is_a_clear_error() {
+    // the unshifted Laplacian on 40²: Jacobi-CG needs about 100 iterations
+    let a = laplacian(40, 0.0);
+    let n = 40 * 40;
+    let (ptr, null) = scalar_structure(n);
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let mut cg = ConjugateGradient::new(Jacobi::default());
+    cg.max_iterations = 5;
+    cg.analyze(&a).unwrap();
+    cg.factor(&a, s).unwrap();
+    let mut x: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
+    let e = cg.solve_in_place(&a, &mut x).unwrap_err();
+    assert!(matches!(e, SolveError::NoConvergence(5)), "{e:?}");
+    // through Algorithm 1's error, as the command line prints it
+    let chain = format!("{:#}", anyhow::Error::from(crate::deform::DeformError::from(e)));
+    assert_eq!(chain, "the linear solver failed: conjugate gradients did not converge in 5 iterations");
+}

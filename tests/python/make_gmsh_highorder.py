@@ -4,7 +4,8 @@
 Usage: make_gmsh_highorder.py OUT.msh ORDER
 
 Writes MSH 4.1 (ASCII) and prints JSON: {"elements": n, "type": t,
-"minDetJac": [...], "minSJ": [...]} for the 2D elements, by tag.
+"tags": [...], "minDetJac": [...], "minSJ": [...]} for the 2D elements,
+by tag.
 """
 import json
 import sys
@@ -32,7 +33,7 @@ def main():
     types = gmsh.model.mesh.getElementTypes(2)
     tags, _ = gmsh.model.mesh.getElementsByType(types[0])
     tags = sorted(int(t) for t in tags)
-    res = {"elements": len(tags), "type": int(types[0]),
+    res = {"elements": len(tags), "type": int(types[0]), "tags": tags,
            "minDetJac": [float(v) for v in gmsh.model.mesh.getElementQualities(tags, "minDetJac")],
            "minSJ": [float(v) for v in gmsh.model.mesh.getElementQualities(tags, "minSJ")]}
     gmsh.finalize()
