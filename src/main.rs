@@ -59,7 +59,7 @@ enum Command {
         /// sliding (default) or dirichlet: how new nodes reach the shapes.
         #[arg(long, default_value = "sliding")]
         mode: String,
-        /// Linear solver of Algorithm 2: auto, cholesky, cg or amg.
+        /// Linear solver of Algorithm 2: auto, cholesky, cholesky_cg, cg or amg.
         #[arg(long, default_value = "auto")]
         solver: String,
         /// The curved mesh to write.
@@ -85,7 +85,7 @@ enum Command {
         /// 2: the quarter disk on n² quads; 3: the quarter ball on n³ hexes.
         #[arg(long, default_value_t = 2)]
         dim: usize,
-        /// auto, cholesky, cg or amg.
+        /// auto, cholesky, cholesky_cg, cg or amg.
         #[arg(long, default_value = "auto")]
         solver: String,
     },
@@ -204,7 +204,7 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn solver_choice(name: &str) -> Result<SolverChoice> {
-    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cg or amg, got `{name}`"))
+    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cholesky_cg, cg or amg, got `{name}`"))
 }
 
 /// An error of a run, prefixed by the input it comes from, except an output

@@ -218,12 +218,15 @@ mod colour_tests {
         assert_disjoint(&groups, &m.cells, m.num_nodes());
     }
 
+    /// No node in two blocks of one colour (cells of one block may share).
     fn assert_disjoint(groups: &[Vec<Range<usize>>], cells: &[[usize; 4]], nodes: usize) {
         for g in groups {
-            let mut seen = vec![false; nodes];
-            for &n in g.iter().flat_map(|r| cells[r.clone()].iter().flatten()) {
-                assert!(!seen[n]);
-                seen[n] = true;
+            let mut owner = vec![usize::MAX; nodes];
+            for (b, r) in g.iter().enumerate() {
+                for &n in cells[r.clone()].iter().flatten() {
+                    assert!(owner[n] == usize::MAX || owner[n] == b, "node {n} in two blocks of a colour");
+                    owner[n] = b;
+                }
             }
         }
     }

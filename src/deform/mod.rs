@@ -26,7 +26,7 @@ pub mod refine;
 
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
-use crate::solve::{Amg, CholeskySolver, ConjugateGradient, Jacobi, SolveError, SpdSolver};
+use crate::solve::{Amg, CholeskySolver, ConjugateGradient, Jacobi, LaggedCholesky, SolveError, SpdSolver};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -285,7 +285,9 @@ pub struct SolverReport {
     pub iterations_mean: f64,
     /// Most CG iterations of one solve.
     pub iterations_max: usize,
-    /// Multigrid hierarchies built (once, then again when the iterations grew).
+    /// Preconditioner set-ups: multigrid hierarchies built, or Cholesky
+    /// factorisations of the lagged factor (once, then again when the
+    /// iterations grew).
     pub hierarchy_builds: usize,
     /// Seconds building them.
     pub setup_s: f64,
@@ -299,7 +301,8 @@ pub struct SolverReport {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverChoice {
-    /// Cholesky up to [`AUTO_AMG_UNKNOWNS`] unknowns (in its dimension),
+    /// CG on an earlier step's Cholesky factor ([`SolverChoice::CholeskyCg`])
+    /// up to [`AUTO_AMG_UNKNOWNS`] unknowns (in its dimension),
     /// multigrid-preconditioned CG above.
     #[default]
     Auto,
@@ -310,30 +313,46 @@ pub enum SolverChoice {
     /// Conjugate gradients preconditioned by smoothed-aggregation
     /// multigrid, warm-started: iterations nearly independent of the size.
     Amg,
+    /// Conjugate gradients preconditioned by the Cholesky factor of an
+    /// earlier step, factored anew when the iterations grow: the exact
+    /// solver's robustness (thin layers) at a fraction of its cost per
+    /// step when the mesh moves little between steps.
+    CholeskyCg,
 }
 
 /// Above these many unknowns `auto` chooses multigrid-preconditioned CG
-/// over Cholesky, in 2D and in 3D. Measured with `deformesh bench` (see
-/// the README): in 3D the multigrid step is 6× faster at 13k unknowns and
-/// 60× at 101k; in 2D it is faster from 20k on (3.6× at 80k), but 2D is
-/// where boundary-layer meshes are curved, and on cells of aspect ratio
-/// 10⁴–10⁵ the multigrid needs 10–100× its usual iterations, so Cholesky
-/// keeps the 2D range it handles in a second or two.
+/// over CG on a lagged Cholesky factor, in 2D and in 3D. Measured with
+/// `deformesh bench` (see the README): in 3D the multigrid step is 6×
+/// faster than Cholesky at 13k unknowns and 60× at 101k; in 2D it is
+/// faster from 20k on (3.6× at 80k), but 2D is where boundary-layer meshes
+/// are curved, and on cells of aspect ratio 10⁴–10⁵ the multigrid needs
+/// 10–100× its usual iterations, while a factor stays exact: the factor
+/// keeps the 2D range it handles in a second or two (reused across steps
+/// it is cheaper still: 2.8 iterations per step on the cylinder
+/// boundary layer at p = 3, one factorisation in ten steps).
 pub const AUTO_AMG_UNKNOWNS: [usize; 2] = [200_000, 20_000];
 
 impl SolverChoice {
     /// The solver this choice makes for a `dim`-D system of `unknowns`.
     pub fn make(self, dim: usize, unknowns: usize, tolerance: f64) -> Box<dyn SpdSolver> {
-        let large = unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)];
-        match self {
+        let choice = match self {
+            SolverChoice::Auto if unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)] => SolverChoice::Amg,
+            SolverChoice::Auto => SolverChoice::CholeskyCg,
+            chosen => chosen,
+        };
+        match choice {
             SolverChoice::Cholesky => Box::new(CholeskySolver::new()),
-            SolverChoice::Auto if !large => Box::new(CholeskySolver::new()),
             SolverChoice::Cg => {
                 let mut cg = ConjugateGradient::new(Jacobi::default());
                 cg.tolerance = tolerance;
                 Box::new(cg)
             }
-            SolverChoice::Auto | SolverChoice::Amg => {
+            SolverChoice::CholeskyCg => {
+                let mut cg = ConjugateGradient::new(LaggedCholesky::default());
+                cg.tolerance = tolerance;
+                Box::new(cg)
+            }
+            SolverChoice::Amg | SolverChoice::Auto => {
                 let mut cg = ConjugateGradient::new(Amg::default());
                 cg.max_iterations = 1000;
                 cg.tolerance = tolerance;

@@ -140,3 +140,73 @@ impl SpdSolver for CholeskySolver {
         "sparse Cholesky (faer, AMD)"
     }
 }
+
+/// A Cholesky factor of an earlier matrix as CG's preconditioner.
+///
+/// Along the deformation the matrix changes with the mesh, and when
+/// curving, only near the boundary: the factor of the first step's matrix
+/// stays an excellent preconditioner for several later ones, and a CG
+/// iteration with it (two triangular solves and a mat-vec) costs a small
+/// part of a numeric factorisation. The factor is renewed when a solve
+/// needed more than [`LaggedCholesky::refactor_after`] iterations, or
+/// failed.
+pub struct LaggedCholesky {
+    chol: CholeskySolver,
+    /// Iterations above which the next set-up factors the matrix anew.
+    pub refactor_after: usize,
+    stale: bool,
+    fresh: bool,
+}
+
+impl Default for LaggedCholesky {
+    fn default() -> Self {
+        LaggedCholesky { chol: CholeskySolver::new(), refactor_after: 8, stale: true, fresh: false }
+    }
+}
+
+impl LaggedCholesky {
+    fn refactor(&mut self, a: &Csr) -> Result<(), SolveError> {
+        if self.chol.n != a.nrows || self.chol.symbolic.is_none() {
+            self.chol.analyze(a)?;
+        }
+        self.chol.factor(a, super::Structure { node_ptr: &[], near_null: &[], count: 0 })?;
+        self.stale = false;
+        self.fresh = true;
+        Ok(())
+    }
+}
+
+impl super::cg::Preconditioner for LaggedCholesky {
+    fn setup(&mut self, a: &Csr, _structure: Structure<'_>) -> Result<bool, SolveError> {
+        if self.stale || self.chol.n != a.nrows {
+            self.refactor(a)?;
+            return Ok(true);
+        }
+        self.fresh = false;
+        Ok(false)
+    }
+
+    fn apply(&mut self, a: &Csr, r: &[f64], z: &mut [f64]) {
+        z.copy_from_slice(r);
+        // sized by `setup`; the only failure is a size mismatch
+        self.chol.solve_in_place(a, z).expect("factor sized at set-up");
+    }
+
+    fn observe(&mut self, iterations: usize) {
+        if iterations > self.refactor_after {
+            self.stale = true;
+        }
+    }
+
+    fn rebuild_if_stale(&mut self, a: &Csr) -> Result<bool, SolveError> {
+        if self.fresh {
+            return Ok(false); // factored for this very matrix
+        }
+        self.refactor(a)?;
+        Ok(true)
+    }
+
+    fn name(&self) -> &'static str {
+        "conjugate gradients (Cholesky factor of an earlier step, warm start)"
+    }
+}

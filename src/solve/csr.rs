@@ -263,7 +263,7 @@ impl RowRuns {
     fn for_rows(&self, a: &Csr, x: &[f64], out: &mut [f64], finish: impl Fn(usize, f64) -> f64 + Sync) {
         let out_ptr = SyncPtr(out.as_mut_ptr());
         self.tasks.par_windows(2).for_each(|t| {
-            let mut buf = [0.0; GATHER];
+            let mut buf = [0.0; GATHER + 4];
             for k in t[0] as usize..t[1] as usize {
                 let (r0, r1) = (self.block_ptr[k] as usize, self.block_ptr[k + 1] as usize);
                 let sums = match r1 - r0 {
@@ -284,7 +284,7 @@ impl RowRuns {
     /// entries are gathered once into a contiguous buffer, then each row
     /// is a dense dot product (vectorised, four accumulators).
     #[inline]
-    fn block_dot<const K: usize>(&self, a: &Csr, k: usize, r0: usize, x: &[f64], buf: &mut [f64; GATHER]) -> [f64; MAX_BLOCK] {
+    fn block_dot<const K: usize>(&self, a: &Csr, k: usize, r0: usize, x: &[f64], buf: &mut [f64; GATHER + 4]) -> [f64; MAX_BLOCK] {
         let base = a.row_ptr[r0];
         let width = a.row_ptr[r0 + 1] - base;
         let (first, last) = (self.run_ptr[k] as usize, self.run_ptr[k + 1] as usize);
@@ -299,7 +299,7 @@ impl RowRuns {
         let mut off = 0;
         for run in first..last {
             let (c0, len) = (self.run_col[run] as usize, self.run_len[run] as usize);
-            buf[off..off + len].copy_from_slice(&x[c0..c0 + len]);
+            gather(&x[c0..], len, &mut buf[off..]);
             off += len;
         }
         let xs = &buf[..width];
@@ -312,6 +312,26 @@ impl RowRuns {
 
 /// Longest block row the gathering mat-vec buffers (on the stack).
 const GATHER: usize = 512;
+
+/// `dst[..len] = src[..len]` for short runs, in fixed copies of 4 (which
+/// compile to two vector moves: a copy of a run's length calls memmove,
+/// which cost more than the products); `dst` may be overwritten up to the
+/// next multiple of 4, hence the slack of the gather buffer.
+#[inline]
+fn gather(src: &[f64], len: usize, dst: &mut [f64]) {
+    let mut t = 0;
+    while t < len {
+        if t + 4 <= src.len() {
+            dst[t..t + 4].copy_from_slice(&src[t..t + 4]);
+        } else {
+            // the last entries of x: one at a time
+            for u in t..len {
+                dst[u] = src[u];
+            }
+        }
+        t += 4;
+    }
+}
 
 /// Σ aᵢ bᵢ for short equal-length slices, four accumulators.
 #[inline]

@@ -21,7 +21,7 @@ mod csr;
 
 pub use amg::{Amg, AmgOptions};
 pub use cg::{ConjugateGradient, Jacobi, Preconditioner, DEFAULT_TOLERANCE};
-pub use cholesky::CholeskySolver;
+pub use cholesky::{CholeskySolver, LaggedCholesky};
 pub use csr::{axpy, dot, Csr};
 
 use std::time::Duration;

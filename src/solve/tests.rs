@@ -222,3 +222,37 @@ fn cg_that_does_not_converge_is_a_clear_error() {
     let chain = format!("{:#}", anyhow::Error::from(crate::deform::DeformError::from(e)));
     assert_eq!(chain, "the linear solver failed: conjugate gradients did not converge in 5 iterations");
 }
+
+#[test]
+fn an_earlier_factor_preconditions_until_the_matrix_has_moved_too_far() {
+    // the shifted Laplacian drifts away from the factored one: a small
+    // drift costs a few iterations on the old factor, a large one makes
+    // the next set-up factor anew
+    let m = 40;
+    let (ptr, null) = scalar_structure(m * m);
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let mut cg = ConjugateGradient::new(LaggedCholesky::default());
+    let mut seen = Vec::new();
+    for (step, shift) in [0.1, 0.102, 0.105, 0.11, 2.0, 2.01].into_iter().enumerate() {
+        // a new solution each step, so that the warm start does not help
+        let x: Vec<f64> = (0..m * m).map(|i| (i as f64 * 0.3 + step as f64).sin()).collect();
+        let a = laplacian(m, shift);
+        if step == 0 {
+            cg.analyze(&a).unwrap();
+        }
+        cg.factor(&a, s).unwrap();
+        let mut b = vec![0.0; m * m];
+        a.apply(&x, &mut b);
+        cg.solve_in_place(&a, &mut b).unwrap();
+        assert!(max_diff(&b, &x) < 1e-6, "step {step}: error {}", max_diff(&b, &x));
+        seen.push((cg.info().rebuilt, cg.info().iterations));
+    }
+    // factored at the first step; the jump to shift 2 needs more than
+    // `refactor_after` iterations on the old factor, so the step after it
+    // factors anew and is then exact again
+    let rebuilt: Vec<bool> = seen.iter().map(|s| s.0).collect();
+    assert_eq!(rebuilt, [true, false, false, false, false, true], "{seen:?}");
+    assert!(seen[1..4].iter().all(|s| s.1 <= 4), "{seen:?}");
+    assert!(seen[4].1 > 8, "{seen:?}");
+    assert!(seen[5].1 <= 2, "{seen:?}");
+}
