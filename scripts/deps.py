@@ -17,7 +17,8 @@ and the edges that break the target layering of issue 12:
   core         lsfem solve mesh geometry geometry3 numeric expr jacobian quality hexquality
                core only, and no cycles
 
-Options: --mermaid prints a mermaid graph instead of the text listing.
+Options: --mermaid prints a mermaid graph instead of the text listing;
+--check exits 1 when an edge breaks the layering or modules form a cycle.
 """
 import os
 import re
@@ -232,6 +233,8 @@ def main():
         print(", ".join(c) + ("   (mutual: " + "; ".join(pairs) + ")" if pairs else ""))
     if not comps:
         print("none")
+    if "--check" in sys.argv and (n or comps):
+        sys.exit(1)
 
 
 if __name__ == "__main__":
