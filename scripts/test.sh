@@ -2,9 +2,9 @@
 # Runs the whole test suite, including the checks against the real Gmsh and
 # VTK (tests/real_programs*.rs), then scripts/behaviour.sh: every case and
 # four `curve` runs compared with the figures recorded before the redesign
-# of issue 12 (about 3 minutes with the release binary, which it builds when
-# stale). BEHAVIOUR=quick runs its quick subset (about 20 s), BEHAVIOUR=0
-# skips it. Creates .venv with the Python packages they
+# of issue 12 (2–3 minutes), with the binary `cargo test` has just built
+# (optimised test profile: no second, release, build in CI).
+# BEHAVIOUR=quick runs its quick subset (about 20 s), BEHAVIOUR=0 skips it. Creates .venv with the Python packages they
 # need on first use; set DEFORMESH_PYTHON to use another interpreter instead.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,6 +21,7 @@ cargo test "$@" 2>&1 | tee "$log" || status=$?
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
      END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
 # behaviour unchanged (issue 12); the first failure's status is kept
+export DEFORMESH="${DEFORMESH:-${CARGO_TARGET_DIR:-target}/debug/deformesh}"
 case "${BEHAVIOUR:-full}" in
     0 | no | off) b=0 ;;
     quick) b=0; scripts/behaviour.sh --quick || b=$? ;;
