@@ -213,6 +213,17 @@ pub enum SubdivideError {
         /// Its group.
         part: String,
     },
+    /// A boundary element between two cells: an interior curve (surface)
+    /// in a boundary group would add a false flux and hold interior nodes.
+    #[error("boundary element {index} (nodes {nodes:?}) of group `{part}` lies inside the mesh, between two cells: a boundary group may hold only edges (faces) of exactly one cell; remove the interior curves (surfaces) from the group")]
+    InteriorFacet {
+        /// Its index among the boundary elements.
+        index: usize,
+        /// Its nodes (0-based).
+        nodes: Vec<usize>,
+        /// Its group.
+        part: String,
+    },
     /// Cell edges (faces) on the boundary that no boundary element covers:
     /// their nodes would move freely.
     #[error("{count} edge(s)/face(s) on the boundary of the mesh are in no boundary group (first with nodes {first:?}): save every boundary element with a physical group (in Gmsh, add the group, or set Mesh.SaveAll = 1)")]
@@ -274,11 +285,14 @@ fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse
     let mut out = Vec::new();
     for (index, (q, part)) in coarse.facets().into_iter().enumerate() {
         let k = key(&q);
-        let outward = owners.get(&k).and_then(|(_, f)| orientation(&q, f).map(|same| (same, f)));
-        let Some((same, f)) = outward else {
-            let part = coarse.names().get(part).cloned().unwrap_or_else(|| format!("#{part}"));
-            return Err(SubdivideError::NotACellFacet { index, nodes: q, part });
+        let outward = owners.get(&k).and_then(|(n, f)| orientation(&q, f).map(|same| (same, f, *n)));
+        let name = |part: usize| coarse.names().get(part).cloned().unwrap_or_else(|| format!("#{part}"));
+        let Some((same, f, owners)) = outward else {
+            return Err(SubdivideError::NotACellFacet { index, nodes: q, part: name(part) });
         };
+        if owners != 1 {
+            return Err(SubdivideError::InteriorFacet { index, nodes: q, part: name(part) });
+        }
         out.push((if same { q } else { f.clone() }, part));
         covered.insert(k);
     }
@@ -892,6 +906,27 @@ mod tests {
         let e = subdivide(&open, &equispaced(2)).err().expect("uncovered");
         assert!(matches!(e, SubdivideError::Uncovered { count: 1, .. }), "{e}");
         assert!(matches!(subdivide(&coarse, &[0.5]), Err(SubdivideError::TooFewNodes(1))));
+        // the edge between the two cells in a group: refused, naming it
+        let mut inner = coarse.clone();
+        let shared: Vec<usize> = (0..coarse.nodes.len()).filter(|&n| coarse.cells[0].contains(&n) && coarse.cells[1].contains(&n)).collect();
+        inner.edges.push(BoundaryEdge { nodes: [shared[0], shared[1]], part: 0 });
+        let e = subdivide(&inner, &equispaced(2)).err().expect("interior");
+        assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
+        assert!(e.to_string().contains(&format!("group `{}`", coarse.part_names[0])) && e.to_string().contains("inside the mesh"), "{e}");
+        // and a hex face between two cells
+        let mut hex = HexMesh::structured_box([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1]);
+        let shared: Vec<usize> = (0..hex.nodes.len()).filter(|&n| hex.cells[0].contains(&n) && hex.cells[1].contains(&n)).collect();
+        let mut face = hex.faces[0].clone();
+        // cyclic order of the shared square x = 1: (y, z) = 00, 10, 11, 01
+        let mut sq = shared.clone();
+        sq.sort_by(|&a, &b| {
+            let ang = |n: usize| (hex.nodes[n][2] - 0.5).atan2(hex.nodes[n][1] - 0.5);
+            ang(a).total_cmp(&ang(b))
+        });
+        face.nodes = [sq[0], sq[1], sq[2], sq[3]];
+        hex.faces.push(face);
+        let e = subdivide(&hex, &equispaced(2)).err().expect("interior face");
+        assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
     }
 
     #[test]
