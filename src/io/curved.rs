@@ -775,8 +775,10 @@ fn read_nodes(cur: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
         }
         for tag in tags {
             let mut x = [0.0f64; 3];
+            let mut z_line = 0;
             for c in &mut x {
                 let (t, line) = cur.token("a node coordinate")?;
+                z_line = line;
                 *c = t
                     .parse()
                     .map_err(|_| syntax(line, "a node coordinate", t))?;
@@ -792,6 +794,10 @@ fn read_nodes(cur: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
                 for _ in 0..edim {
                     cur.parse::<f64>("a parametric coordinate")?;
                 }
+            }
+            // a 2D mesh keeps x and y only: a node off z = 0 would move
+            if raw.dim == 2 && x[2] != 0.0 {
+                return Err(MshError::OffPlane { line: z_line, tag, z: x[2] });
             }
             raw.nodes.push(x);
         }
