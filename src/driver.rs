@@ -546,6 +546,9 @@ pub struct CurveReport {
     pub cells: usize,
     /// Groups the geometry file does not name: their nodes stayed.
     pub unbound_groups: Vec<String>,
+    /// Clockwise input cells turned counter-clockwise (2D; the written
+    /// mesh has them counter-clockwise).
+    pub reoriented_cells: usize,
     /// Validity and geometry of the result.
     pub quality: CurvedQuality,
     /// Node spacing.
@@ -574,17 +577,34 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let text = crate::io::msh::msh_text(&bytes)?;
     let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
-    match crate::io::msh::cell_type_of(&text) {
+    // either may relax the check that curved groups lie on their shapes
+    let mut job = job.clone();
+    job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.shape_tolerance.unwrap_or(0.0));
+    let result = match crate::io::msh::cell_type_of(&text) {
         Some((3, _)) => {
             let mesh = crate::io::msh::parse_hex_msh(&text)?;
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job, &mut progress)
+            curve_mesh(&mesh, &parts, unbound, 0, &job, &mut progress)
         }
         _ => {
-            let mesh = crate::io::msh::parse_msh(&text)?;
+            let mut mesh = crate::io::msh::parse_msh(&text)?;
+            // Gmsh may write a surface's quads clockwise (by its normal)
+            let turned = mesh.orient_counter_clockwise();
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job, &mut progress)
+            curve_mesh(&mesh, &parts, unbound, turned, &job, &mut progress)
         }
+    };
+    result.map_err(|e| with_node_tag(e, &text))
+}
+
+/// An off-shape node of the input named by its MSH tag.
+fn with_node_tag(e: RunError, text: &str) -> RunError {
+    match e {
+        RunError::Curve(CurveError::OffShape(mut o)) if !o.after => {
+            o.tag = crate::io::msh::node_tags(text).and_then(|t| t.get(o.node).copied());
+            RunError::Curve(CurveError::OffShape(o))
+        }
+        e => e,
     }
 }
 
@@ -592,6 +612,7 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     mesh: &M,
     parts: &[BoundaryPart<D>],
     unbound: Vec<String>,
+    reoriented: usize,
     job: &CurveJob,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<CurveReport, RunError> {
@@ -626,6 +647,7 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         dimension: D,
         cells: c.mesh.cells.len(),
         unbound_groups: unbound,
+        reoriented_cells: reoriented,
         quality: c.quality.clone(),
         spacing: c.mesh.spacing,
         steps: c.stats.steps,
