@@ -776,6 +776,16 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
         for (ends, facets) in &self.edges {
             let parts_here: Vec<usize> = facets.iter().map(|&f| self.facet_parts[f]).collect();
             let carrier_part = parts_here.iter().copied().find(|&k| moving(k));
+            // the edge's new nodes follow the first moving part only
+            if let Some(a) = carrier_part.filter(|_| !parts_here.iter().any(|&k| fixed(k))) {
+                let h = (0..D).map(|k| (ends[1][k] - ends[0][k]).powi(2)).sum::<f64>().sqrt();
+                for &b in parts_here.iter().filter(|&&b| b != a && moving(b)) {
+                    for s in [0.25, 0.5, 0.75] {
+                        let x = std::array::from_fn(|k| (1.0 - s) * ends[0][k] + s * ends[1][k]);
+                        super::check_meeting(&parts, a, b, x, h)?;
+                    }
+                }
+            }
             carriers.push(Carrier { corners: ends.to_vec(), part: carrier_part, bounded: carrier_part.is_some() });
         }
         let start = self.mesh.nodes().to_vec();
@@ -927,6 +937,37 @@ mod tests {
         hex.faces.push(face);
         let e = subdivide(&hex, &equispaced(2)).err().expect("interior face");
         assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
+    }
+
+    /// Faces xmax and ymax of the unit cube curved to two spheres through
+    /// their corners: their shared edge cannot follow both. Refused,
+    /// naming both groups; with one sphere (bound twice) accepted.
+    #[test]
+    fn two_curved_groups_meeting_along_an_edge() {
+        use crate::geometry3::SurfaceSpec;
+        use std::sync::Arc;
+        let mesh = HexMesh::structured_box([0.0; 3], [1.0; 3], [2, 2, 2]);
+        let sphere = |centre: [f64; 3], radius: f64| -> Arc<dyn crate::deform::BoundaryShape<3>> { Arc::new(SurfaceSpec::Sphere { centre, radius }.build().unwrap()) };
+        let parts_with = |a: Arc<dyn crate::deform::BoundaryShape<3>>, b: Arc<dyn crate::deform::BoundaryShape<3>>| -> Vec<BoundaryPart<3>> {
+            crate::mesh::BOX_FACES
+                .iter()
+                .map(|&name| {
+                    let kind = match name {
+                        "xmax" => PartKind::Move { target: a.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                        "ymax" => PartKind::Move { target: b.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                        _ => PartKind::Slip { wall: None },
+                    };
+                    BoundaryPart { name: name.to_string(), kind }
+                })
+                .collect()
+        };
+        let s = subdivide(&mesh, &equispaced(2)).unwrap();
+        let r = 1.5f64.sqrt();
+        let two = parts_with(sphere([0.0, 0.5, 0.5], r), sphere([0.5, 0.0, 0.5], r));
+        let e = s.refine_mesh().boundary(refine_parts(&two)).err().expect("refused").to_string();
+        assert!(e.contains("`xmax`") && e.contains("`ymax`") && e.contains("not supported"), "{e}");
+        let one = sphere([0.5; 3], 0.75f64.sqrt());
+        assert!(s.refine_mesh().boundary(refine_parts(&parts_with(one.clone(), one))).is_ok());
     }
 
     #[test]
