@@ -584,17 +584,64 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
         Some((3, _)) => {
             let mesh = crate::io::msh::parse_hex_msh(&text)?;
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, 0, &job, &mut progress)
+            let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
+            curve_mesh(&mesh, &parts, (unbound, &shared), 0, &job, &mut progress)
         }
         _ => {
             let mut mesh = crate::io::msh::parse_msh(&text)?;
             // Gmsh may write a surface's quads clockwise (by its normal)
             let turned = mesh.orient_counter_clockwise();
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, turned, &job, &mut progress)
+            let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
+            curve_mesh(&mesh, &parts, (unbound, &shared), turned, &job, &mut progress)
         }
     };
     result.map_err(|e| with_node_tag(e, &text))
+}
+
+/// A boundary element of an entity in several physical groups is read
+/// once per group, but the flow needs one behaviour per element: a group
+/// the geometry file binds governs one it leaves alone, and two bound
+/// groups sharing elements are refused, naming both. Returns the mesh with
+/// one copy of each element and, per copy left out, the index of the kept
+/// one and its group (the output puts the element in that group too).
+fn one_group_per_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(mesh: &M, unbound: &[String], gfile: &str) -> Result<(M, Vec<(usize, usize)>), RunError> {
+    use std::collections::HashMap;
+    let names = mesh.names();
+    let bound = |part: usize| !unbound.contains(&names[part]);
+    let mut first: HashMap<Vec<usize>, usize> = HashMap::new();
+    let mut kept: Vec<(Vec<usize>, usize)> = Vec::new();
+    let mut shared: Vec<(usize, usize)> = Vec::new();
+    for (nodes, part) in mesh.facets() {
+        let mut key = nodes.clone();
+        key.sort_unstable();
+        let Some(&k) = first.get(&key).filter(|&&k| kept[k].1 != part) else {
+            first.entry(key).or_insert(kept.len());
+            kept.push((nodes, part));
+            continue;
+        };
+        let other = kept[k].1;
+        if bound(part) && bound(other) {
+            return Err(crate::case::CaseError {
+                file: gfile.to_string(),
+                message: format!(
+                    "groups `{}` and `{}` share boundary elements (a curve or surface in both groups), and both are bound here: an element can have one behaviour only; bind one of them, or give the shared part a group of its own",
+                    names[other], names[part]
+                ),
+            }
+            .into());
+        }
+        if bound(part) {
+            kept[k].1 = part;
+            shared.push((k, other));
+        } else {
+            shared.push((k, part));
+        }
+    }
+    if shared.is_empty() {
+        return Ok((mesh.clone(), shared));
+    }
+    Ok((M::assemble(mesh.nodes().to_vec(), mesh.cells().to_vec(), kept, names.to_vec()), shared))
 }
 
 /// An off-shape node of the input named by its MSH tag.
@@ -611,13 +658,18 @@ fn with_node_tag(e: RunError, text: &str) -> RunError {
 fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     mesh: &M,
     parts: &[BoundaryPart<D>],
-    unbound: Vec<String>,
+    (unbound, shared): (Vec<String>, &[(usize, usize)]),
     reoriented: usize,
     job: &CurveJob,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<CurveReport, RunError> {
     let clock = Instant::now();
-    let c = mesh.curve(parts, &job.options, progress)?;
+    let mut c = mesh.curve(parts, &job.options, progress)?;
+    // elements of an entity in several groups go into each of them
+    for &(k, part) in shared {
+        let nodes = c.mesh.boundary[k].nodes.clone();
+        c.mesh.boundary.push(crate::io::curved::CurvedBoundary { nodes, part });
+    }
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
     }

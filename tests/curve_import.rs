@@ -233,6 +233,36 @@ fn a_clockwise_mesh_is_turned_and_curved() {
 }
 
 #[test]
+fn an_entity_in_two_groups_belongs_to_both() {
+    // the wall curve also in an unbound group `ring`, listed first on the
+    // entity: the wall is still curved, and the written mesh has its
+    // elements in both groups
+    let dir = tempfile::tempdir().unwrap();
+    let two = damaged(dir.path(), |t| t.replacen("3\n1 1 \"wall\"", "4\n1 4 \"ring\"\n1 1 \"wall\"", 1).replacen("1e-07 1 1 2 5 -5", "1e-07 2 4 1 2 5 -5", 1));
+    let mut j = job(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
+    j.input = two.clone();
+    let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.unbound_groups.contains(&"ring".to_string()), "{:?}", r.unbound_groups);
+    let mesh = CurvedMesh::<2>::read_msh(&dir.path().join("curved2.msh")).unwrap();
+    let group = |name: &str| mesh.part_names.iter().position(|n| n == name).unwrap();
+    let of = |part: usize| mesh.boundary.iter().filter(|b| b.part == part).map(|b| b.nodes.clone()).collect::<Vec<_>>();
+    assert_eq!(of(group("wall")).len(), 12);
+    assert_eq!(of(group("wall")), of(group("ring")));
+    for b in of(group("wall")) {
+        for n in b {
+            let x = mesh.nodes[n];
+            assert!((x[0].hypot(x[1]) - 0.5).abs() < 1e-10, "wall node at radius {}", x[0].hypot(x[1]));
+        }
+    }
+    // both groups bound: one element cannot have two behaviours
+    let both = format!("{CYLINDER}\n[[group]]\nname = \"ring\"\nkind = \"fixed\"\n");
+    let mut j = job(dir.path(), "cylinder_bl_coarse.msh", &both, 2, 4);
+    j.input = two;
+    let e = curve_file(&j, |_| {}).err().expect("refused").to_string();
+    assert!(e.contains("`ring`") && e.contains("`wall`") && e.contains("share boundary elements"), "{e}");
+}
+
+#[test]
 fn fuzzed_inputs_never_panic() {
     // a bounded mutation fuzz of the reader: random byte flips, deletions
     // and duplications of the cylinder file; every outcome is Ok or a

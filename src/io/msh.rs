@@ -629,7 +629,8 @@ impl RawMesh {
         Ok(())
     }
 
-    /// Lines become named boundary edges, quads cells; z must be 0.
+    /// Lines become named boundary edges, quads cells; z must be 0. A
+    /// line of a curve in several groups becomes one edge per group.
     fn into_quad_mesh(mut self) -> Result<QuadMesh, MshError> {
         if let Some((line, tag, z)) = self.off_plane {
             return Err(MshError::OffPlane { line, tag, z });
@@ -637,14 +638,11 @@ impl RawMesh {
         self.lines.sort_by_key(|l| l.0);
         self.quads.sort_by_key(|q| q.0);
         let curves = self.lines.iter().map(|l| l.1);
-        let (part_names, curve_part) = self.resolve_parts(1, curves, "curve");
+        let (part_names, curve_parts) = self.resolve_parts(1, curves, "curve");
         let edges = self
             .lines
             .iter()
-            .map(|&(_, curve, nodes)| BoundaryEdge {
-                nodes,
-                part: curve_part[&curve],
-            })
+            .flat_map(|&(_, curve, nodes)| curve_parts[&curve].iter().map(move |&part| BoundaryEdge { nodes, part }))
             .collect();
         Ok(QuadMesh {
             nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
@@ -659,14 +657,11 @@ impl RawMesh {
         self.quads.sort_by_key(|q| q.0);
         self.hexes.sort_by_key(|h| h.0);
         let surfaces = self.quads.iter().map(|q| q.1);
-        let (part_names, surface_part) = self.resolve_parts(2, surfaces, "surface");
+        let (part_names, surface_parts) = self.resolve_parts(2, surfaces, "surface");
         let faces = self
             .quads
             .iter()
-            .map(|&(_, surface, nodes)| BoundaryFace {
-                nodes,
-                part: surface_part[&surface],
-            })
+            .flat_map(|&(_, surface, nodes)| surface_parts[&surface].iter().map(move |&part| BoundaryFace { nodes, part }))
             .collect();
         Ok(HexMesh {
             nodes: self.nodes,
@@ -676,15 +671,16 @@ impl RawMesh {
         })
     }
 
-    /// Part names and the part of every entity in `entities` (of dimension
-    /// `dim`, the boundary dimension): the named physical groups of that
-    /// dimension by tag, then `<prefix><tag>` for entities in none of them.
+    /// Part names and the parts of every entity in `entities` (of
+    /// dimension `dim`, the boundary dimension): the named physical groups
+    /// of that dimension by tag, then `<prefix><tag>` for entities in none
+    /// of them. An entity in several named groups belongs to each.
     fn resolve_parts(
         &self,
         dim: usize,
         entities: impl Iterator<Item = i64>,
         prefix: &str,
-    ) -> (Vec<String>, HashMap<i64, usize>) {
+    ) -> (Vec<String>, HashMap<i64, Vec<usize>>) {
         let mut named: Vec<&(i64, i64, String)> = self
             .physical_names
             .iter()
@@ -710,14 +706,17 @@ impl RawMesh {
                 .get(&(dim, entity))
                 .map(Vec::as_slice)
                 .unwrap_or(&[]);
-            let part = match physicals.iter().find_map(|t| tag_part.get(t)) {
-                Some(&p) => p,
-                None => {
-                    names.push(format!("{prefix}{entity}"));
-                    names.len() - 1
+            let mut parts: Vec<usize> = Vec::new();
+            for &p in physicals.iter().filter_map(|t| tag_part.get(t)) {
+                if !parts.contains(&p) {
+                    parts.push(p);
                 }
-            };
-            entity_part.insert(entity, part);
+            }
+            if parts.is_empty() {
+                names.push(format!("{prefix}{entity}"));
+                parts.push(names.len() - 1);
+            }
+            entity_part.insert(entity, parts);
         }
         (names, entity_part)
     }
@@ -1352,6 +1351,22 @@ mod tests {
         let (text, _) = corrupted("\n1 0 0\n", "\n1 0 0.25\n");
         let e = CurvedMesh::<2>::parse_msh(&text).err().expect("off the plane").to_string();
         assert!(e.contains("node 2 has z = 0.25"), "{e}");
+    }
+
+    /// The cylinder's wall curve also in a second group `ring` (listed
+    /// first on the entity): its lines belong to both groups.
+    #[test]
+    fn an_entity_in_two_groups_belongs_to_both() {
+        let text = include_str!("../../tests/data/cylinder_bl_coarse.msh")
+            .replacen("3\n1 1 \"wall\"", "4\n1 4 \"ring\"\n1 1 \"wall\"", 1)
+            .replacen("1e-07 1 1 2 5 -5", "1e-07 2 4 1 2 5 -5", 1);
+        let m = parse_msh(&text).unwrap();
+        assert_eq!(m.part_names, ["wall", "farfield", "ring"]);
+        let count = |part: usize| m.edges.iter().filter(|e| e.part == part).count();
+        assert_eq!((count(0), count(2)), (12, 12));
+        let wall: Vec<[usize; 2]> = m.edges.iter().filter(|e| e.part == 0).map(|e| e.nodes).collect();
+        let ring: Vec<[usize; 2]> = m.edges.iter().filter(|e| e.part == 2).map(|e| e.nodes).collect();
+        assert_eq!(wall, ring);
     }
 
     #[test]
