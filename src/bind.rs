@@ -31,6 +31,12 @@ pub struct GeometryFile {
     /// One table per bound group.
     #[serde(default)]
     pub group: Vec<GroupSpec>,
+    /// How far a node of a curved group may lie from its shape, relative
+    /// to its shortest adjacent edge (see
+    /// [`crate::highorder::curve::DEFAULT_SHAPE_TOLERANCE`]); raises, never
+    /// lowers, the default.
+    #[serde(default)]
+    pub shape_tolerance: Option<f64>,
     /// The text it came from (for line numbers).
     #[serde(skip)]
     source: String,
@@ -174,6 +180,11 @@ impl GeometryFile {
     pub fn parse(text: &str, file: &str) -> Result<GeometryFile, CaseError> {
         let mut g: GeometryFile = toml::from_str(text).map_err(|e| CaseError { file: file.to_string(), message: e.to_string().trim_end().to_string() })?;
         g.source = text.to_string();
+        if let Some(t) = g.shape_tolerance {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(CaseError { file: file.to_string(), message: format!("shape_tolerance must be a positive number (a fraction of the local edge length), got {t}") });
+            }
+        }
         Ok(g)
     }
 

@@ -533,6 +533,9 @@ pub struct CurveReport {
     pub cells: usize,
     /// Groups the geometry file does not name: their nodes stayed.
     pub unbound_groups: Vec<String>,
+    /// Clockwise input cells turned counter-clockwise (2D; the written
+    /// mesh has them counter-clockwise).
+    pub reoriented_cells: usize,
     /// Validity and geometry of the result.
     pub quality: CurvedQuality,
     /// Node spacing.
@@ -562,20 +565,84 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let text = crate::io::msh::msh_text(&bytes)?;
     let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
+    // either may relax the check that curved groups lie on their shapes
+    let mut job = job.clone();
+    job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.shape_tolerance.unwrap_or(0.0));
     let fine_cells = |d: u32| job.options.order.max(1).pow(d);
-    match crate::io::msh::cell_type_of(&text) {
+    let result = match crate::io::msh::cell_type_of(&text) {
         Some((3, _)) => {
             let (mesh, tags) = crate::io::msh::parse_hex_msh_tagged(&text)?;
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
             geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(3)))
+            let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
+            curve_mesh(&mesh, &parts, (unbound, &shared), 0, &job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(3)))
         }
         _ => {
-            let (mesh, tags) = crate::io::msh::parse_msh_tagged(&text)?;
+            let (mut mesh, tags) = crate::io::msh::parse_msh_tagged(&text)?;
+            // Gmsh may write a surface's quads clockwise (by its normal)
+            let turned = mesh.orient_counter_clockwise();
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
             geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
-            curve_mesh(&mesh, &parts, unbound, job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(2)))
+            let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
+            curve_mesh(&mesh, &parts, (unbound, &shared), turned, &job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(2)))
         }
+    };
+    result.map_err(|e| with_node_tag(e, &text))
+}
+
+/// A boundary element of an entity in several physical groups is read
+/// once per group, but the flow needs one behaviour per element: a group
+/// the geometry file binds governs one it leaves alone, and two bound
+/// groups sharing elements are refused, naming both. Returns the mesh with
+/// one copy of each element and, per copy left out, the index of the kept
+/// one and its group (the output puts the element in that group too).
+fn one_group_per_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(mesh: &M, unbound: &[String], gfile: &str) -> Result<(M, Vec<(usize, usize)>), RunError> {
+    use std::collections::HashMap;
+    let names = mesh.names();
+    let bound = |part: usize| !unbound.contains(&names[part]);
+    let mut first: HashMap<Vec<usize>, usize> = HashMap::new();
+    let mut kept: Vec<(Vec<usize>, usize)> = Vec::new();
+    let mut shared: Vec<(usize, usize)> = Vec::new();
+    for (nodes, part) in mesh.facets() {
+        let mut key = nodes.clone();
+        key.sort_unstable();
+        let Some(&k) = first.get(&key).filter(|&&k| kept[k].1 != part) else {
+            first.entry(key).or_insert(kept.len());
+            kept.push((nodes, part));
+            continue;
+        };
+        let other = kept[k].1;
+        if bound(part) && bound(other) {
+            return Err(crate::case::CaseError {
+                file: gfile.to_string(),
+                message: format!(
+                    "groups `{}` and `{}` share boundary elements (a curve or surface in both groups), and both are bound here: an element can have one behaviour only; bind one of them, or give the shared part a group of its own",
+                    names[other], names[part]
+                ),
+            }
+            .into());
+        }
+        if bound(part) {
+            kept[k].1 = part;
+            shared.push((k, other));
+        } else {
+            shared.push((k, part));
+        }
+    }
+    if shared.is_empty() {
+        return Ok((mesh.clone(), shared));
+    }
+    Ok((M::assemble(mesh.nodes().to_vec(), mesh.cells().to_vec(), kept, names.to_vec()), shared))
+}
+
+/// An off-shape node of the input named by its MSH tag.
+fn with_node_tag(e: RunError, text: &str) -> RunError {
+    match e {
+        RunError::Curve(CurveError::OffShape(mut o)) if !o.after => {
+            o.tag = crate::io::msh::node_tags(text).and_then(|t| t.get(o.node).copied());
+            RunError::Curve(CurveError::OffShape(o))
+        }
+        e => e,
     }
 }
 
@@ -609,12 +676,18 @@ fn by_tag(e: RunError, tags: &[u64], per_cell: usize) -> RunError {
 fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     mesh: &M,
     parts: &[BoundaryPart<D>],
-    unbound: Vec<String>,
+    (unbound, shared): (Vec<String>, &[(usize, usize)]),
+    reoriented: usize,
     job: &CurveJob,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<CurveReport, RunError> {
     let clock = Instant::now();
-    let c = mesh.curve(parts, &job.options, progress)?;
+    let mut c = mesh.curve(parts, &job.options, progress)?;
+    // elements of an entity in several groups go into each of them
+    for &(k, part) in shared {
+        let nodes = c.mesh.boundary[k].nodes.clone();
+        c.mesh.boundary.push(crate::io::curved::CurvedBoundary { nodes, part });
+    }
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
     }
@@ -644,6 +717,7 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         dimension: D,
         cells: c.mesh.cells.len(),
         unbound_groups: unbound,
+        reoriented_cells: reoriented,
         quality: c.quality.clone(),
         spacing: c.mesh.spacing,
         steps: c.stats.steps,

@@ -217,24 +217,85 @@ pub fn hex_volume(p: &Hex) -> f64 {
 /// and `false` means invalid or so nearly invalid that det J comes within
 /// the Bézier bound's slack of 0 on a 1/16-sized sub-cell.
 pub fn hex_is_valid(p: &Hex) -> bool {
-    certified_positive(&det_j_bezier(p), MAX_SUBDIVISION_DEPTH)
+    let q = normalised(p);
+    let b = det_j_bezier(&q);
+    certified_positive(&b, rounding_bound(&q, &b), MAX_SUBDIVISION_DEPTH)
 }
 
-/// The refined test of [`hex_is_valid`] on Bernstein coefficients `b`.
-fn certified_positive(b: &[f64; 27], depth: u32) -> bool {
-    if b.iter().all(|&x| x > 0.0) {
+/// The cell scaled by a power of two so that its longest edge component
+/// lies in `(½, 1]`: exact, and it only multiplies det J by a positive
+/// power of two, so the verdict does not depend on the cell's size, and
+/// the bound of [`rounding_bound`] neither underflows nor overflows. (No
+/// centring: det J is computed from edge vectors, whose differences are
+/// each within one relative rounding wherever the cell lies.)
+fn normalised(p: &Hex) -> Hex {
+    let m = edge_extent(p, &[0, 1, 2]);
+    if !(m.is_finite() && m > 0.0) {
+        return *p;
+    }
+    let mut s = 2f64.powi((m.log2().ceil() as i32).clamp(-1020, 1020));
+    if m > s {
+        s *= 2.0;
+    }
+    p.map(|x| x.map(|c| c / s))
+}
+
+/// The cell's edges in each direction u, v, w, as node pairs.
+const EDGES: [[(usize, usize); 4]; 3] = [
+    [(0, 1), (3, 2), (4, 5), (7, 6)],
+    [(0, 3), (1, 2), (4, 7), (5, 6)],
+    [(0, 4), (1, 5), (3, 7), (2, 6)],
+];
+
+/// The largest edge component over the edges of the directions `dirs`.
+fn edge_extent(q: &Hex, dirs: &[usize]) -> f64 {
+    dirs.iter()
+        .flat_map(|&d| EDGES[d].iter())
+        .flat_map(|&(a, c)| sub(q[c], q[a]))
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+/// A bound on `|computed − exact|` for every coefficient of
+/// [`det_j_bezier`] of the normalised cell `q`, including the halvings of
+/// [`certified_positive`].
+///
+/// Why it holds: a value `det J` is `Σ ± a_i b_j c_k` over six products
+/// of Jacobian entries; an entry is an edge difference (1 rounding)
+/// blended with exact weights in {0, ¼, ½, 1} (3 roundings of the 4-term
+/// sum), the cross and dot products add 2 + 3: at most 3·4 + 5 = 17
+/// roundings per product, and the Bernstein conversion `2 f½ − (f0 +
+/// f2)/2` 2 per direction: k = 23 (26 used). So each coefficient errs by
+/// at most `γ_k` times the sum of the absolute values of its terms, at
+/// most `6 Lu Lv Lw` per value (`L` the largest edge component in each
+/// direction; a blend of edges is no longer than the longest) and 3× that
+/// per direction of the conversion (weights 2, ½, ½): `27 · 6 Lu Lv Lw`.
+/// A halving is two averages of coefficients (≤ 2 roundings of magnitude
+/// ≤ max |b| + err) per direction, 3 directions per level.
+fn rounding_bound(q: &Hex, b: &[f64; 27]) -> f64 {
+    let (lu, lv, lw) = (edge_extent(q, &[0]), edge_extent(q, &[1]), edge_extent(q, &[2]));
+    let g = |k: f64| k * f64::EPSILON / (1.0 - k * f64::EPSILON);
+    // (ε = 2U: γ_k written with ε overstates it twofold, safely)
+    let values = g(26.0) * 162.0 * lu * lv * lw * 1.01;
+    let big = b.iter().fold(0.0f64, |m, x| m.max(x.abs())) + values;
+    values + MAX_SUBDIVISION_DEPTH as f64 * 3.0 * g(2.0) * big
+}
+
+/// The refined test of [`hex_is_valid`] on Bernstein coefficients `b`,
+/// each within `err` of the exact one.
+fn certified_positive(b: &[f64; 27], err: f64, depth: u32) -> bool {
+    if b.iter().all(|&x| x > err) {
         return true;
     }
-    // A non-positive corner value is a true value, not a bound: no
-    // subdivision can make it positive.
-    if depth == 0 || CORNER_COEFFS.iter().any(|&i| b[i] <= 0.0) {
+    // A corner coefficient is a true value (up to err): no subdivision
+    // can make it certainly positive.
+    if depth == 0 || CORNER_COEFFS.iter().any(|&i| b[i] <= err) {
         return false;
     }
     let mut pieces = vec![*b];
     for stride in [1, 3, 9] {
         pieces = pieces.iter().flat_map(|q| split_half(q, stride)).collect();
     }
-    pieces.iter().all(|q| certified_positive(q, depth - 1))
+    pieces.iter().all(|q| certified_positive(q, err, depth - 1))
 }
 
 /// The coefficients of the two halves `[0,½]` and `[½,1]` (in the direction
@@ -518,6 +579,45 @@ mod tests {
         assert!(corner_det_j(&invalid).iter().all(|&d| d > 0.0));
         assert!(sampled_min(&invalid) < -0.2);
         assert!(!hex_is_valid(&invalid));
+    }
+
+    /// The unit cube with node 6 pulled towards node 0 by `lam` (dyadic
+    /// steps: translating by 1e6 is exact).
+    fn pulled(lam: f64) -> Hex {
+        let mut p = unit_cube();
+        p[6] = [1.0 - lam, 1.0 - 0.75 * lam, 1.0 - 0.5 * lam];
+        p
+    }
+
+    /// A barely valid and a barely invalid cell (det J at node 6 about
+    /// ±1e-8): the same verdicts translated by 1e6, scaled by 1e-6 or by
+    /// 2^-40, and the rounding bound is far below det J.
+    #[test]
+    fn verdicts_do_not_depend_on_position_or_size() {
+        let step = 2f64.powi(-28);
+        let (mut lo, mut hi) = (0u64, 1u64 << 28);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if hex_is_valid(&pulled(mid as f64 * step)) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let (valid, invalid) = (pulled(lo as f64 * step), pulled(hi as f64 * step));
+        assert!(corner_det_j(&valid)[6] > 0.0 && corner_det_j(&valid)[6] < 1e-7, "{:?}", corner_det_j(&valid));
+        assert!(corner_det_j(&invalid)[6] <= 0.0 && corner_det_j(&invalid)[6] > -1e-7);
+        for (cell, verdict) in [(valid, true), (invalid, false)] {
+            assert_eq!(hex_is_valid(&cell), verdict);
+            assert_eq!(hex_is_valid(&cell.map(|x| x.map(|c| c + 1e6))), verdict);
+            assert_eq!(hex_is_valid(&cell.map(|x| x.map(|c| c * 1e-6))), verdict);
+            assert_eq!(hex_is_valid(&cell.map(|x| x.map(|c| c * 2f64.powi(-40)))), verdict);
+            let q = normalised(&cell);
+            let b = det_j_bezier(&q);
+            assert!(rounding_bound(&q, &b) < 1e-11, "{}", rounding_bound(&q, &b));
+        }
+        // a cell 1e-200 across is neither lost to underflow nor refused
+        assert!(hex_is_valid(&unit_cube().map(|x| x.map(|c| c * 1e-200))));
     }
 
     #[test]

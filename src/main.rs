@@ -62,6 +62,11 @@ enum Command {
         /// Linear solver of Algorithm 2: auto, cholesky, cholesky_cg, cg or amg.
         #[arg(long, default_value = "auto")]
         solver: String,
+        /// How far a node of a curved group may lie from its shape, as a
+        /// fraction of its shortest adjacent edge (the geometry file's
+        /// `shape_tolerance` may raise it).
+        #[arg(long, default_value_t = deformesh::highorder::curve::DEFAULT_SHAPE_TOLERANCE)]
+        shape_tolerance: f64,
         /// The curved mesh to write.
         #[arg(short, long)]
         out: PathBuf,
@@ -126,7 +131,8 @@ fn run(cli: Cli) -> Result<()> {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out, "<built-in demo>")
         }
-        Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, out } => {
+        Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, shape_tolerance, out } => {
+            anyhow::ensure!(shape_tolerance.is_finite() && shape_tolerance > 0.0, "--shape-tolerance must be a positive number, got {shape_tolerance}");
             deformesh::highorder::check_order(order).map_err(|e| anyhow::anyhow!("--order: {e}"))?;
             anyhow::ensure!(steps >= 1, "--steps must be at least 1");
             let spacing: deformesh::highorder::Spacing = serde_json::from_value(serde_json::Value::String(spacing.clone()))
@@ -138,13 +144,16 @@ fn run(cli: Cli) -> Result<()> {
             };
             let solver = solver_choice(&solver)?;
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
-            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, flow, ..Default::default() };
+            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, flow, shape_tolerance, ..Default::default() };
             deformesh::io::folder::check_output_file(&out)?;
             let job = deformesh::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
             let bar = Bar::new();
             let r = deformesh::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
             bar.finish();
             let r = r?;
+            if r.reoriented_cells > 0 {
+                eprintln!("{} clockwise cell(s) of the input turned counter-clockwise (the method needs counter-clockwise cells; the output has them so)", r.reoriented_cells);
+            }
             for g in &r.unbound_groups {
                 eprintln!("group `{g}` is not in the geometry file: its nodes stay where they are");
             }

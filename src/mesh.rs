@@ -118,6 +118,85 @@ impl QuadMesh {
         }
         parts
     }
+
+    /// Turns clockwise cells counter-clockwise, as the method requires;
+    /// returns how many were turned.
+    ///
+    /// Gmsh orders a surface's quads by the surface's normal, so a mesh
+    /// (or one surface of it) may be clockwise yet valid. Orientation is
+    /// decided per connected set of cells, not per cell: neighbours are
+    /// made to agree (a shared edge runs opposite ways in the two cells),
+    /// then each set is turned so that its signed area is positive. A cell
+    /// folded over its neighbours keeps its order and stays inverted, so
+    /// the validity check still refuses it. Where neighbours cannot agree
+    /// (not orientable) nothing in that set is turned.
+    pub fn orient_counter_clockwise(&mut self) -> usize {
+        let flip = self.orientation_flips();
+        let mut turned = 0;
+        for (cell, f) in self.cells.iter_mut().zip(flip) {
+            if f {
+                *cell = [cell[0], cell[3], cell[2], cell[1]];
+                turned += 1;
+            }
+        }
+        turned
+    }
+
+    /// Per cell, whether to reverse it (see
+    /// [`QuadMesh::orient_counter_clockwise`]).
+    fn orientation_flips(&self) -> Vec<bool> {
+        use std::collections::HashMap;
+        // undirected edge → (cell, runs from the smaller node)
+        let mut by_edge: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
+        for (c, cell) in self.cells.iter().enumerate() {
+            for k in 0..4 {
+                let (a, b) = (cell[k], cell[(k + 1) % 4]);
+                by_edge.entry((a.min(b), a.max(b))).or_default().push((c, a < b));
+            }
+        }
+        let n = self.cells.len();
+        let mut flip: Vec<Option<bool>> = vec![None; n];
+        let mut out = vec![false; n];
+        for start in 0..n {
+            if flip[start].is_some() {
+                continue;
+            }
+            // a breadth-first walk over the set of `start`
+            flip[start] = Some(false);
+            let (mut set, mut next, mut consistent) = (vec![start], 0, true);
+            while next < set.len() {
+                let c = set[next];
+                next += 1;
+                let fc = flip[c] == Some(true);
+                let cell = self.cells[c];
+                for k in 0..4 {
+                    let (a, b) = (cell[k], cell[(k + 1) % 4]);
+                    for &(d, fwd) in &by_edge[&(a.min(b), a.max(b))] {
+                        if d == c {
+                            continue;
+                        }
+                        // same direction in both: one of them must turn
+                        let want = fc ^ (fwd == (a < b));
+                        match flip[d] {
+                            None => {
+                                flip[d] = Some(want);
+                                set.push(d);
+                            }
+                            Some(f) if f != want => consistent = false,
+                            Some(_) => {}
+                        }
+                    }
+                }
+            }
+            let signed: f64 = set.iter().map(|&c| if flip[c] == Some(true) { -1.0 } else { 1.0 } * self.cell_area(c)).sum();
+            if consistent {
+                for &c in &set {
+                    out[c] = (flip[c] == Some(true)) != (signed < 0.0);
+                }
+            }
+        }
+        out
+    }
 }
 
 #[cfg(test)]
@@ -143,6 +222,37 @@ mod tests {
         let parts = m.node_parts();
         assert_eq!(parts[0], vec![0, 2]);
         assert!(parts[6].is_empty());
+    }
+
+    #[test]
+    fn clockwise_cells_are_turned_but_folded_ones_are_not() {
+        let ccw = QuadMesh::structured_box([0.0, 0.0], [2.0, 1.0], 4, 3);
+        let mut m = ccw.clone();
+        assert_eq!(m.orient_counter_clockwise(), 0);
+        // the whole mesh clockwise: every cell turned, all valid again
+        for c in &mut m.cells {
+            c.reverse();
+        }
+        assert!(m.cells.iter().enumerate().all(|(c, _)| m.cell_area(c) < 0.0));
+        assert_eq!(m.orient_counter_clockwise(), 12);
+        assert!(crate::quality::invalid_cells(&m, &m.nodes).is_empty());
+        // one clockwise cell in a counter-clockwise mesh (as from a second
+        // Gmsh surface with the other normal): turned
+        let mut one = ccw.clone();
+        one.cells[5].reverse();
+        assert_eq!(one.orient_counter_clockwise(), 1);
+        assert!(crate::quality::invalid_cells(&one, &one.nodes).is_empty());
+        // a cell folded through its neighbours (its node order agrees with
+        // theirs): not turned, still invalid
+        let mut folded = ccw.clone();
+        let centre = folded.cells[5];
+        // mirror the cell's nodes across its centre line x = 0.75 … by
+        // moving its right nodes far to the left
+        for &n in &[centre[1], centre[2]] {
+            folded.nodes[n][0] -= 1.0;
+        }
+        assert_eq!(folded.orient_counter_clockwise(), 0);
+        assert!(crate::quality::invalid_cells(&folded, &folded.nodes).contains(&5));
     }
 }
 

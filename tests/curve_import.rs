@@ -203,6 +203,66 @@ fn an_inverted_input_cell_is_listed() {
 }
 
 #[test]
+fn a_clockwise_mesh_is_turned_and_curved() {
+    // every quad of the file reversed: clockwise, yet valid for Gmsh
+    let dir = tempfile::tempdir().unwrap();
+    let cw = damaged(dir.path(), |t| {
+        let i = t.find("$Elements").unwrap();
+        let mut in_quads = false;
+        let mut out = String::new();
+        for (k, line) in t.lines().enumerate() {
+            let f: Vec<&str> = line.split_whitespace().collect();
+            let mut l = line.to_string();
+            if k > t[..i].lines().count() && f.len() == 4 {
+                in_quads = f[2] == "3";
+            } else if in_quads && f.len() == 5 {
+                l = format!("{} {} {} {} {}", f[0], f[1], f[4], f[3], f[2]);
+            }
+            out.push_str(&l);
+            out.push('\n');
+        }
+        out
+    });
+    let mut j = job(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
+    j.input = cw;
+    let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.reoriented_cells, 368);
+    assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+    let report = std::fs::read_to_string(dir.path().join("curved2.report.json")).unwrap();
+    assert!(report.contains("\"reoriented_cells\": 368"), "{report}");
+}
+
+#[test]
+fn an_entity_in_two_groups_belongs_to_both() {
+    // the wall curve also in an unbound group `ring`, listed first on the
+    // entity: the wall is still curved, and the written mesh has its
+    // elements in both groups
+    let dir = tempfile::tempdir().unwrap();
+    let two = damaged(dir.path(), |t| t.replacen("3\n1 1 \"wall\"", "4\n1 4 \"ring\"\n1 1 \"wall\"", 1).replacen("1e-07 1 1 2 5 -5", "1e-07 2 4 1 2 5 -5", 1));
+    let mut j = job(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, 2, 4);
+    j.input = two.clone();
+    let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.unbound_groups.contains(&"ring".to_string()), "{:?}", r.unbound_groups);
+    let mesh = CurvedMesh::<2>::read_msh(&dir.path().join("curved2.msh")).unwrap();
+    let group = |name: &str| mesh.part_names.iter().position(|n| n == name).unwrap();
+    let of = |part: usize| mesh.boundary.iter().filter(|b| b.part == part).map(|b| b.nodes.clone()).collect::<Vec<_>>();
+    assert_eq!(of(group("wall")).len(), 12);
+    assert_eq!(of(group("wall")), of(group("ring")));
+    for b in of(group("wall")) {
+        for n in b {
+            let x = mesh.nodes[n];
+            assert!((x[0].hypot(x[1]) - 0.5).abs() < 1e-10, "wall node at radius {}", x[0].hypot(x[1]));
+        }
+    }
+    // both groups bound: one element cannot have two behaviours
+    let both = format!("{CYLINDER}\n[[group]]\nname = \"ring\"\nkind = \"fixed\"\n");
+    let mut j = job(dir.path(), "cylinder_bl_coarse.msh", &both, 2, 4);
+    j.input = two;
+    let e = curve_file(&j, |_| {}).err().expect("refused").to_string();
+    assert!(e.contains("`ring`") && e.contains("`wall`") && e.contains("share boundary elements"), "{e}");
+}
+
+#[test]
 fn fuzzed_inputs_never_panic() {
     // a bounded mutation fuzz of the reader: random byte flips, deletions
     // and duplications of the cylinder file; every outcome is Ok or a
@@ -281,12 +341,27 @@ fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
 }
 
 #[test]
-fn input_vertices_off_the_shape_show_in_the_node_distance() {
-    // the wall's own (old) nodes lie on r = 0.5; bound to r = 0.52 they
-    // stay, and the report must not hide it
+fn a_shape_that_does_not_match_the_mesh_is_refused() {
+    // the wall's own (old) nodes lie on r = 0.5: bound to r = 0.51 they
+    // would stay 0.01 off it, a scalloped wall; refused, naming the group,
+    // the distance and the node, and nothing is written
     let dir = tempfile::tempdir().unwrap();
-    let r = curve_ok(dir.path(), "cylinder_bl_coarse.msh", &CYLINDER.replace("radius = 0.5", "radius = 0.52"), 2, 4);
+    let off = CYLINDER.replace("radius = 0.5", "radius = 0.51");
+    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &off, 2, 4), |_| {}).err().expect("refused").to_string();
+    assert!(e.contains("`wall`") && e.contains("does not match the mesh") && e.contains("1.000e-2"), "{e}");
+    // every wall node is 0.01 off; the worst relative to its edges (0.259)
+    // is named by its tag in the file
+    assert!(e.contains("node 13 at (-0.2500000000000029, -0.4330127018922176)") && e.contains("3.86e-2 of its shortest adjacent edge") && e.contains("--shape-tolerance"), "{e}");
+    assert!(!dir.path().join("curved2.msh").exists());
+    // the geometry file can relax the check: then it runs, and the report
+    // shows the distance
+    let relaxed = format!("shape_tolerance = 0.5\n{}", CYLINDER.replace("radius = 0.5", "radius = 0.52"));
+    let r = curve_ok(dir.path(), "cylinder_bl_coarse.msh", &relaxed, 2, 4);
     assert!((r.quality.boundary_node_distance - 0.02).abs() < 1e-9, "{}", r.quality.boundary_node_distance);
+    // the matching shape passes with the default (see the cylinder test)
+    let bad = format!("shape_tolerance = -1\n{CYLINDER}");
+    let e = curve_file(&job(dir.path(), "cylinder_bl_coarse.msh", &bad, 2, 4), |_| {}).err().expect("refused").to_string();
+    assert!(e.contains("shape_tolerance must be a positive number"), "{e}");
 }
 
 /// A hex boundary layer on the cylinder r = 0.5 (first cell `first`,
@@ -385,4 +460,24 @@ fn extruded_thin_boundary_layer_with_slip_end_planes_stays_valid() {
         "extruded 1e-5 layer, {cells} hexes, p = {p}: min det J {:.3e}, scaled Jacobian min {:.4}, wall within {wall_off:.1e}, planes within {:.1e}, first layer changes by {:.1e} at the vertices, {:.1}% over all wall nodes, {} steps ({} halved), {:.1}s; Gmsh {a:?}",
         r.quality.min_det_j, r.quality.scaled_jacobian.min, bottom_off.max(top_off), layer.vertices, 100.0 * layer.all_nodes, r.steps, r.halved_steps, r.total_s
     );
+}
+
+#[test]
+fn wall_nodes_pinned_off_the_shape_by_fixed_neighbours_are_refused() {
+    // top and bottom fixed: the new nodes on the edges where they meet the
+    // wall stay on the straight chords, off the cylinder; the mesh must
+    // not be written as fine
+    let dir = tempfile::tempdir().unwrap();
+    let input = extruded_bl(dir.path(), 0.05, 0.3, 0.8);
+    let mut j = job(dir.path(), "unused", &CYLINDER_3D.replace("kind = \"slip\"", "kind = \"fixed\""), 2, 4);
+    j.input = input;
+    let e = curve_file(&j, |_| {}).err().expect("refused").to_string();
+    assert!(e.contains("after curving") && e.contains("`wall`") && e.contains("fixed"), "{e}");
+    eprintln!("fixed end planes: {e}");
+    assert!(!dir.path().join("curved2.msh").exists());
+    // slipping end planes let them onto the cylinder: accepted
+    j.geometry = dir.path().join("slip.toml");
+    std::fs::write(&j.geometry, CYLINDER_3D).unwrap();
+    let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.quality.boundary_node_distance < 1e-10, "{:e}", r.quality.boundary_node_distance);
 }

@@ -204,13 +204,21 @@ fn every_target_shape_is_reached_exactly() {
         assert!(lo > mlo - 0.01 && hi < mhi + 0.01, "{name}: J/f in [{lo}, {hi}], measured [{mlo}, {mhi}]");
     }
     // an open curve and a line: the top of the unit square onto a wave
-    // through given points, and the right side onto a slanted line
+    // through given points, and the right side onto a slanted line; the
+    // wave ends where the line takes the corner (1, 1): (1, 1) projected
+    // onto the line, (1 + 0.2/1.04, 1/1.04)
     let text = "[mesh]\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\ncells = [16, 16]\n\
         [[boundary]]\nname = \"wave\"\nsides = [\"top\"]\nkind = \"move\"\n\
-        shape = { type = \"spline\", points = [[-0.2, 1.0], [0.25, 1.15], [0.5, 1.0], [0.75, 0.85], [1.2, 1.0]] }\n\
+        shape = { type = \"spline\", points = [[-0.2, 1.0], [0.25, 1.15], [0.5, 1.0], [0.75, 0.85], [1.1923076923076923, 0.9615384615384616]] }\n\
         correspondence = \"normal\"\n\
         [[boundary]]\nname = \"slant\"\nsides = [\"right\"]\nkind = \"move\"\n\
         shape = { type = \"line\", from = [1.0, 0.0], to = [1.2, 1.0] }\ncorrespondence = \"normal\"\n";
+    // (a wave ending at (1.2, 1) would leave the corner 2.9e-2 off it:
+    // refused, naming both groups)
+    let off = text.replace("[1.1923076923076923, 0.9615384615384616]]", "[1.2, 1.0]]");
+    let s = Case::parse(&off, "shape").unwrap().setup("shape", Path::new(".")).unwrap();
+    let e = Deformation::new(s.mesh, s.parts, s.field, s.options).err().expect("refused").to_string();
+    assert!(e.contains("`wave`") && e.contains("`slant`") && e.contains("not supported"), "{e}");
     let (lo, hi) = run_on_target(text);
     eprintln!("wave: J/f in [{lo:.3}, {hi:.3}]");
     // measured [0.558, 1.480]; margin 0.01

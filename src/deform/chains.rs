@@ -290,6 +290,23 @@ impl Chains {
 
 }
 
+impl Chains {
+    /// A corner between two moving chains follows the first one's path:
+    /// refuse it unless that ends on the other's target too.
+    fn check_meetings(&self) -> Result<(), DeformError> {
+        for (i, role) in self.roles.iter().enumerate() {
+            let Role::Corner { path: Some((first, _)) } = *role else { continue };
+            let a = self.chains[first].part;
+            let x = self.start[i];
+            for c in self.chains.iter().filter(|c| c.part != a && (c.points[0] == x || c.points[c.points.len() - 1] == x)) {
+                let h = c.points.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).fold(f64::INFINITY, f64::min);
+                super::check_meeting(&self.parts, a, c.part, x, h)?;
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Splits the boundary into chains and gives every node its role.
 fn classify(mesh: &QuadMesh, parts: &[BoundaryPart]) -> (Vec<Chain>, Vec<Role>) {
     let n = mesh.num_nodes();
@@ -427,6 +444,40 @@ impl Q1Mesh<2, 4> for QuadMesh {
         let (chains, roles) = classify(self, &parts);
         let b = Chains { parts, chains, roles, start: self.nodes.clone() };
         b.check_reachable()?;
+        b.check_meetings()?;
         Ok(b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::ShapeSpec;
+    use std::sync::Arc;
+
+    /// The sides `right` and `top` of the unit square moved onto two
+    /// circles: the corner (1, 1) cannot follow both. Refused, naming both
+    /// groups; with one circle (bound twice) accepted.
+    #[test]
+    fn two_moving_parts_meeting_at_a_corner() {
+        let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 3);
+        let circle = |centre: [f64; 2], radius: f64| -> Arc<dyn super::super::BoundaryShape<2>> { Arc::new(ShapeSpec::Circle { centre, radius }.build().unwrap()) };
+        let parts_with = |a: Arc<dyn super::super::BoundaryShape<2>>, b: Arc<dyn super::super::BoundaryShape<2>>| -> Vec<BoundaryPart> {
+            crate::mesh::BOX_SIDES
+                .iter()
+                .map(|&name| {
+                    let kind = match name {
+                        "right" => PartKind::Move { target: a.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                        "top" => PartKind::Move { target: b.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                        _ => PartKind::Fixed,
+                    };
+                    BoundaryPart { name: name.to_string(), kind }
+                })
+                .collect()
+        };
+        let e = mesh.boundary(parts_with(circle([0.0, 0.5], 1.2), circle([0.5, 0.0], 1.3))).err().expect("refused").to_string();
+        assert!(e.contains("`right`") && e.contains("`top`") && e.contains("not supported"), "{e}");
+        let one = circle([0.5, 0.5], 0.8);
+        assert!(mesh.boundary(parts_with(one.clone(), one)).is_ok());
     }
 }

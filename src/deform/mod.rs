@@ -119,6 +119,34 @@ pub struct BoundaryPart<const D: usize = 2> {
     pub kind: PartKind<D>,
 }
 
+/// Where moving parts `a` and `b` meet, a node follows `a`'s image: that
+/// is right only if the image lies on `b`'s target too. Refuses the case
+/// otherwise (bringing the node onto the intersection of both shapes is
+/// not supported), naming both groups. `x` is a starting point there and
+/// `h` the local edge length the distance is measured against.
+pub(crate) fn check_meeting<const D: usize>(parts: &[BoundaryPart<D>], a: usize, b: usize, x: [f64; D], h: f64) -> Result<(), DeformError> {
+    let PartKind::Move { target, .. } = &parts[b].kind else { return Ok(()) };
+    // no image: the reachability checks report it
+    let Some(y) = parts[a].image(x) else { return Ok(()) };
+    let d = target.distance(y);
+    // a shared shape (or one that agrees here) gives rounding only
+    if d <= 1e-9 * h {
+        return Ok(());
+    }
+    let fmt = |p: [f64; D]| p.iter().map(|c| format!("{c:.6}")).collect::<Vec<_>>().join(", ");
+    Err(DeformError::Unreachable {
+        part: parts[a].name.clone(),
+        why: format!(
+            "it meets curved group `{}` along an edge (or at a corner) at ({}), which would follow `{}`'s shape to ({}), {d:.3e} off `{}`'s shape; a node on two different shapes (their intersection) is not supported yet: bind both groups to one shape, or one of them as `fixed` or `slip`",
+            parts[b].name,
+            fmt(x),
+            parts[a].name,
+            fmt(y),
+            parts[b].name
+        ),
+    })
+}
+
 impl<const D: usize> BoundaryPart<D> {
     /// The image X(p) on the target of a starting point p of a moving part.
     fn image(&self, p: [f64; D]) -> Option<[f64; D]> {

@@ -447,10 +447,16 @@ fn classify(mesh: &HexMesh, parts: Vec<BoundaryPart<3>>) -> Result<Patches, Defo
             1 => Role3::Face { patch: ps[0], s: patches[ps[0]].param(mesh.nodes[i]) },
             2 => {
                 let key = [ps[0], ps[1]];
-                let id = *edge_of.entry(key).or_insert_with(|| {
-                    edges.push(edge_between(mesh, &node_patches, key, &patches, &parts));
-                    edges.len() - 1
-                });
+                let id = match edge_of.get(&key) {
+                    Some(&id) => id,
+                    None => {
+                        let e = edge_between(mesh, &node_patches, key, &patches, &parts);
+                        check_edge_meeting(&e, &patches, &parts)?;
+                        edges.push(e);
+                        edge_of.insert(key, edges.len() - 1);
+                        edges.len() - 1
+                    }
+                };
                 let e = &edges[id];
                 let d = sub(e.b, e.a);
                 Role3::Edge { edge: id, sigma: dot(sub(mesh.nodes[i], e.a), d) / dot(d, d) }
@@ -459,6 +465,21 @@ fn classify(mesh: &HexMesh, parts: Vec<BoundaryPart<3>>) -> Result<Patches, Defo
         };
     }
     Ok(Patches { parts, patches, edges, roles, start: mesh.nodes.clone() })
+}
+
+/// An edge carried by one moving patch whose other patch moves too, onto
+/// another shape: refuse it unless the carrier's image of the edge lies on
+/// that shape as well.
+fn check_edge_meeting(e: &Edge, patches: &[Patch], parts: &[BoundaryPart<3>]) -> Result<(), DeformError> {
+    let Some(c) = e.carrier else { return Ok(()) };
+    let (a, other) = (patches[c].part, e.patches.iter().map(|&p| patches[p].part).find(|&k| k != patches[c].part));
+    let Some(b) = other else { return Ok(()) };
+    let h = dot(sub(e.b, e.a), sub(e.b, e.a)).sqrt();
+    for s in [0.0, 0.5, 1.0] {
+        let x = std::array::from_fn(|k| (1.0 - s) * e.a[k] + s * e.b[k]);
+        super::check_meeting(parts, a, b, x, h)?;
+    }
+    Ok(())
 }
 
 /// The patches every node touches, sorted.

@@ -213,6 +213,17 @@ pub enum SubdivideError {
         /// Its group.
         part: String,
     },
+    /// A boundary element between two cells: an interior curve (surface)
+    /// in a boundary group would add a false flux and hold interior nodes.
+    #[error("boundary element {index} (nodes {nodes:?}) of group `{part}` lies inside the mesh, between two cells: a boundary group may hold only edges (faces) of exactly one cell; remove the interior curves (surfaces) from the group")]
+    InteriorFacet {
+        /// Its index among the boundary elements.
+        index: usize,
+        /// Its nodes (0-based).
+        nodes: Vec<usize>,
+        /// Its group.
+        part: String,
+    },
     /// Cell edges (faces) on the boundary that no boundary element covers:
     /// their nodes would move freely.
     #[error("{count} edge(s)/face(s) on the boundary of the mesh are in no boundary group (first with nodes {first:?}): save every boundary element with a physical group (in Gmsh, add the group, or set Mesh.SaveAll = 1)")]
@@ -274,11 +285,14 @@ fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse
     let mut out = Vec::new();
     for (index, (q, part)) in coarse.facets().into_iter().enumerate() {
         let k = key(&q);
-        let outward = owners.get(&k).and_then(|(_, f)| orientation(&q, f).map(|same| (same, f)));
-        let Some((same, f)) = outward else {
-            let part = coarse.names().get(part).cloned().unwrap_or_else(|| format!("#{part}"));
-            return Err(SubdivideError::NotACellFacet { index, nodes: q, part });
+        let outward = owners.get(&k).and_then(|(n, f)| orientation(&q, f).map(|same| (same, f, *n)));
+        let name = |part: usize| coarse.names().get(part).cloned().unwrap_or_else(|| format!("#{part}"));
+        let Some((same, f, owners)) = outward else {
+            return Err(SubdivideError::NotACellFacet { index, nodes: q, part: name(part) });
         };
+        if owners != 1 {
+            return Err(SubdivideError::InteriorFacet { index, nodes: q, part: name(part) });
+        }
         out.push((if same { q } else { f.clone() }, part));
         covered.insert(k);
     }
@@ -762,6 +776,16 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
         for (ends, facets) in &self.edges {
             let parts_here: Vec<usize> = facets.iter().map(|&f| self.facet_parts[f]).collect();
             let carrier_part = parts_here.iter().copied().find(|&k| moving(k));
+            // the edge's new nodes follow the first moving part only
+            if let Some(a) = carrier_part.filter(|_| !parts_here.iter().any(|&k| fixed(k))) {
+                let h = (0..D).map(|k| (ends[1][k] - ends[0][k]).powi(2)).sum::<f64>().sqrt();
+                for &b in parts_here.iter().filter(|&&b| b != a && moving(b)) {
+                    for s in [0.25, 0.5, 0.75] {
+                        let x = std::array::from_fn(|k| (1.0 - s) * ends[0][k] + s * ends[1][k]);
+                        super::check_meeting(&parts, a, b, x, h)?;
+                    }
+                }
+            }
             carriers.push(Carrier { corners: ends.to_vec(), part: carrier_part, bounded: carrier_part.is_some() });
         }
         let start = self.mesh.nodes().to_vec();
@@ -892,6 +916,58 @@ mod tests {
         let e = subdivide(&open, &equispaced(2)).err().expect("uncovered");
         assert!(matches!(e, SubdivideError::Uncovered { count: 1, .. }), "{e}");
         assert!(matches!(subdivide(&coarse, &[0.5]), Err(SubdivideError::TooFewNodes(1))));
+        // the edge between the two cells in a group: refused, naming it
+        let mut inner = coarse.clone();
+        let shared: Vec<usize> = (0..coarse.nodes.len()).filter(|&n| coarse.cells[0].contains(&n) && coarse.cells[1].contains(&n)).collect();
+        inner.edges.push(BoundaryEdge { nodes: [shared[0], shared[1]], part: 0 });
+        let e = subdivide(&inner, &equispaced(2)).err().expect("interior");
+        assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
+        assert!(e.to_string().contains(&format!("group `{}`", coarse.part_names[0])) && e.to_string().contains("inside the mesh"), "{e}");
+        // and a hex face between two cells
+        let mut hex = HexMesh::structured_box([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1]);
+        let shared: Vec<usize> = (0..hex.nodes.len()).filter(|&n| hex.cells[0].contains(&n) && hex.cells[1].contains(&n)).collect();
+        let mut face = hex.faces[0].clone();
+        // cyclic order of the shared square x = 1: (y, z) = 00, 10, 11, 01
+        let mut sq = shared.clone();
+        sq.sort_by(|&a, &b| {
+            let ang = |n: usize| (hex.nodes[n][2] - 0.5).atan2(hex.nodes[n][1] - 0.5);
+            ang(a).total_cmp(&ang(b))
+        });
+        face.nodes = [sq[0], sq[1], sq[2], sq[3]];
+        hex.faces.push(face);
+        let e = subdivide(&hex, &equispaced(2)).err().expect("interior face");
+        assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
+    }
+
+    /// Faces xmax and ymax of the unit cube curved to two spheres through
+    /// their corners: their shared edge cannot follow both. Refused,
+    /// naming both groups; with one sphere (bound twice) accepted.
+    #[test]
+    fn two_curved_groups_meeting_along_an_edge() {
+        use crate::geometry3::SurfaceSpec;
+        use std::sync::Arc;
+        let mesh = HexMesh::structured_box([0.0; 3], [1.0; 3], [2, 2, 2]);
+        let sphere = |centre: [f64; 3], radius: f64| -> Arc<dyn crate::deform::BoundaryShape<3>> { Arc::new(SurfaceSpec::Sphere { centre, radius }.build().unwrap()) };
+        let parts_with = |a: Arc<dyn crate::deform::BoundaryShape<3>>, b: Arc<dyn crate::deform::BoundaryShape<3>>| -> Vec<BoundaryPart<3>> {
+            crate::mesh::BOX_FACES
+                .iter()
+                .map(|&name| {
+                    let kind = match name {
+                        "xmax" => PartKind::Move { target: a.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                        "ymax" => PartKind::Move { target: b.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                        _ => PartKind::Slip { wall: None },
+                    };
+                    BoundaryPart { name: name.to_string(), kind }
+                })
+                .collect()
+        };
+        let s = subdivide(&mesh, &equispaced(2)).unwrap();
+        let r = 1.5f64.sqrt();
+        let two = parts_with(sphere([0.0, 0.5, 0.5], r), sphere([0.5, 0.0, 0.5], r));
+        let e = s.refine_mesh().boundary(refine_parts(&two)).err().expect("refused").to_string();
+        assert!(e.contains("`xmax`") && e.contains("`ymax`") && e.contains("not supported"), "{e}");
+        let one = sphere([0.5; 3], 0.75f64.sqrt());
+        assert!(s.refine_mesh().boundary(refine_parts(&parts_with(one.clone(), one))).is_ok());
     }
 
     #[test]

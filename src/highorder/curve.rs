@@ -35,11 +35,25 @@ pub struct CurveOptions {
     /// New nodes of every curved part follow straight paths to their
     /// images (the paper's Dirichlet data) instead of sliding.
     pub dirichlet: bool,
+    /// How far a node of a curved part may lie from its shape, relative
+    /// to the shortest edge of its boundary elements: checked on the input
+    /// (the shape must match the mesh) and on the result (no node pinned
+    /// off the shape). See [`DEFAULT_SHAPE_TOLERANCE`].
+    pub shape_tolerance: f64,
 }
+
+/// The default of [`CurveOptions::shape_tolerance`]: 1e-3 of the local
+/// edge. Gmsh puts the nodes of a meshed curve or surface on it to
+/// rounding (measured: wall nodes of `cylinder_bl_coarse.msh` within
+/// 5.6e-17 of r = 0.5, 2.1e-16 of their edges of 0.259; sphere nodes of
+/// `ball_octant_hex.msh` within 2.2e-16 of r = 1), while a shape visibly
+/// off (r = 0.51 on that cylinder: 3.9e-2 of the edge) is far above;
+/// 1e-3 leaves room for shapes typed with 4–5 significant digits.
+pub const DEFAULT_SHAPE_TOLERANCE: f64 = 1e-3;
 
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: 10, flow: DeformOptions::default(), samples: 16, dirichlet: false }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: 10, flow: DeformOptions::default(), samples: 16, dirichlet: false, shape_tolerance: DEFAULT_SHAPE_TOLERANCE }
     }
 }
 
@@ -58,6 +72,11 @@ pub enum CurveError {
     /// Algorithm 2 failed (a tangle, an unreachable target, ...).
     #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {0}")]
     Deform(DeformError),
+    /// A node of a curved part is off its shape by more than the
+    /// tolerance: the shape does not match the mesh (`after` false), or a
+    /// neighbouring group held a node off it (`after` true).
+    #[error("{}", off_shape_message(.0))]
+    OffShape(Box<OffShape>),
 }
 
 // By hand, not `#[from]`: that would also make the DeformError the source,
@@ -66,6 +85,93 @@ impl From<DeformError> for CurveError {
     fn from(e: DeformError) -> Self {
         CurveError::Deform(e)
     }
+}
+
+/// Where a curved part's node is farthest off its shape, relative to the
+/// local edge length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffShape {
+    /// The group.
+    pub group: String,
+    /// Distance of the node to the shape.
+    pub distance: f64,
+    /// Shortest edge of the group's boundary elements at the node.
+    pub edge: f64,
+    /// The tolerance relative to `edge`.
+    pub tolerance: f64,
+    /// The node (0-based index of the mesh's nodes; after curving, of the
+    /// curved mesh's).
+    pub node: usize,
+    /// Its MSH node tag, when the caller knows it.
+    pub tag: Option<u64>,
+    /// Its position.
+    pub at: Vec<f64>,
+    /// Found on the curved result rather than on the input.
+    pub after: bool,
+}
+
+fn off_shape_message(o: &OffShape) -> String {
+    let node = match (o.tag, o.after) {
+        (Some(t), _) => format!("node {t}"),
+        (None, true) => "a node".to_string(),
+        (None, false) => format!("a node (index {})", o.node),
+    };
+    let at: Vec<String> = o.at.iter().map(|x| format!("{x}")).collect();
+    let what = if o.after {
+        "after curving, a node of curved group `{g}` is off its shape (held there by a neighbouring group, e.g. a `fixed` one whose nodes do not lie on this shape)"
+    } else {
+        "the shape of curved group `{g}` does not match the mesh"
+    };
+    format!(
+        "{}: {node} at ({}) is {:.3e} from the shape, {:.2e} of its shortest adjacent edge {:.3e}; at most {:.1e} is accepted (relax with --shape-tolerance or `shape_tolerance` in the geometry file)",
+        what.replace("{g}", &o.group),
+        at.join(", "),
+        o.distance,
+        o.distance / o.edge,
+        o.edge,
+        o.tolerance
+    )
+}
+
+/// The node of a moving part farthest off its shape relative to the
+/// shortest edge of the part's facets at it, if beyond `tol`. Facets are
+/// `(nodes, part)`; `corners` gives a facet's corner nodes in cyclic
+/// order, between which the edges are measured.
+fn worst_off_shape<const D: usize>(
+    nodes: &[[f64; D]],
+    facets: &[(Vec<usize>, usize)],
+    corners: impl Fn(&[usize]) -> Vec<usize>,
+    parts: &[BoundaryPart<D>],
+    names: &[String],
+    tol: f64,
+) -> Option<OffShape> {
+    use std::collections::HashMap;
+    let len = |a: usize, b: usize| (0..D).map(|k| (nodes[a][k] - nodes[b][k]).powi(2)).sum::<f64>().sqrt();
+    // per (part, node): the shortest edge of the part's facets at it
+    let mut edge: HashMap<(usize, usize), f64> = HashMap::new();
+    for (f, part) in facets {
+        if !matches!(parts.get(*part).map(|p| &p.kind), Some(PartKind::Move { .. })) {
+            continue;
+        }
+        let c = corners(f);
+        let shortest = (0..c.len()).map(|i| len(c[i], c[(i + 1) % c.len()])).fold(f64::INFINITY, f64::min);
+        for &n in f {
+            let e = edge.entry((*part, n)).or_insert(f64::INFINITY);
+            *e = e.min(shortest);
+        }
+    }
+    let mut worst: Option<(f64, OffShape)> = None;
+    for (&(part, n), &h) in &edge {
+        let PartKind::Move { target, .. } = &parts[part].kind else { continue };
+        let d = target.distance(nodes[n]);
+        // a NaN distance is off the shape too
+        let ratio = if d.is_nan() { f64::INFINITY } else { d / h };
+        if !(ratio <= tol) && worst.as_ref().is_none_or(|w| ratio > w.0 || (ratio == w.0 && n < w.1.node)) {
+            let group = names.get(part).cloned().unwrap_or_else(|| parts[part].name.clone());
+            worst = Some((ratio, OffShape { group, distance: d, edge: h, tolerance: tol, node: n, tag: None, at: nodes[n].to_vec(), after: false }));
+        }
+    }
+    worst.map(|w| w.1)
 }
 
 /// The figures of a curved mesh.
@@ -189,13 +295,17 @@ where
     if !bad.is_empty() {
         return Err(CurveError::InvalidCoarse(bad));
     }
+    let mut parts2 = refine_parts(parts);
+    // a facet of the linear mesh is its corners, in cyclic order
+    if let Some(o) = worst_off_shape(coarse.nodes(), &coarse.facets(), |f| f.to_vec(), &parts2, coarse.names(), opts.shape_tolerance) {
+        return Err(CurveError::OffShape(Box::new(o)));
+    }
     let p = opts.order;
     let clock = Instant::now();
     let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?)?;
     // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
     // a few thousand nodes, as for Algorithm 1
     let flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
-    let mut parts2 = refine_parts(parts);
     if opts.dirichlet {
         for part in parts2.iter_mut() {
             if let PartKind::Move { mode, .. } = &mut part.kind {
@@ -217,6 +327,14 @@ where
     };
     let clock = Instant::now();
     let (certificates, mut quality) = certify_mesh(&mesh)?;
+    let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
+    let n1 = p + 1;
+    // corners of a tensor-ordered boundary element, in cyclic order
+    let corners = |f: &[usize]| if D == 2 { vec![f[0], f[p]] } else { vec![f[0], f[p], f[n1 * n1 - 1], f[n1 * p]] };
+    if let Some(mut o) = worst_off_shape(&mesh.nodes, &fine_facets, corners, &parts2, &mesh.part_names, opts.shape_tolerance) {
+        o.after = true;
+        return Err(CurveError::OffShape(Box::new(o)));
+    }
     // every node of a curved boundary element, the old (fixed) ones too:
     // they were not moved, so only this shows a vertex off its shape
     quality.boundary_node_distance = moved_distance.max(node_distance(&mesh, &parts2));
@@ -350,6 +468,74 @@ pub fn sampled_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryP
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::deform::{Correspondence, MoveMode};
+    use crate::mesh::QuadMesh;
+    use proptest::test_runner::{Config, TestRng, TestRunner};
+    use std::sync::Arc;
+
+    /// A sector of the annulus 1 ≤ r ≤ 1.5 (counter-clockwise cells) with
+    /// a smooth random bend vanishing on r = 1, moved by `x ↦ s R x + t`;
+    /// its bottom side lies on the circle (centre t, radius s).
+    fn sector(theta: f64, bend: f64, angle: f64, s: f64, t: [f64; 2]) -> QuadMesh {
+        let mut m = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 4, 2);
+        let (c, sn) = (angle.cos(), angle.sin());
+        for x in &mut m.nodes {
+            let [u, v] = *x;
+            let r = 1.0 + 0.5 * v + bend * v * (std::f64::consts::PI * u).sin();
+            let a = theta * (1.0 - u) + bend * v * u;
+            let (px, py) = (r * a.cos(), r * a.sin());
+            *x = [s * (c * px - sn * py) + t[0], s * (sn * px + c * py) + t[1]];
+        }
+        m
+    }
+
+    /// Random valid meshes (smooth maps of a box, random rotations, scales
+    /// and translations) curved at p = 1..3: the certificate agrees with a
+    /// dense sampling of det J (the lower bound is below every sample, the
+    /// attained value is not far above the smallest, and valid elements
+    /// have no sample ≤ 0).
+    #[test]
+    fn certificate_agrees_with_dense_sampling() {
+        let config = Config { cases: 6, failure_persistence: None, ..Config::default() };
+        let mut runner = TestRunner::new_with_rng(config.clone(), TestRng::deterministic_rng(config.rng_algorithm));
+        let strategy = (1usize..=3, 0.6f64..1.5, 0.0f64..0.15, 0.0f64..std::f64::consts::TAU, -3.0f64..3.0, -1e3f64..1e3, -1e3f64..1e3);
+        runner
+            .run(&strategy, |(p, theta, bend, angle, log_s, tx, ty)| {
+                let s = 10f64.powf(log_s);
+                let m = sector(theta, bend, angle, s, [tx, ty]);
+                let circle = crate::geometry::ShapeSpec::Circle { centre: [tx, ty], radius: s }.build().unwrap();
+                let parts: Vec<BoundaryPart<2>> = crate::mesh::BOX_SIDES
+                    .iter()
+                    .map(|&name| BoundaryPart {
+                        name: name.to_string(),
+                        kind: if name == "bottom" {
+                            PartKind::Move { target: Arc::new(circle.clone()), correspondence: Correspondence::Normal, mode: MoveMode::Sliding }
+                        } else {
+                            PartKind::Fixed
+                        },
+                    })
+                    .collect();
+                let opts = CurveOptions { order: p, steps: 2, ..Default::default() };
+                let c = curve(&m, &parts, &opts).map_err(|e| proptest::test_runner::TestCaseError::fail(e.to_string()))?;
+                let n = 41;
+                for (e, cert) in c.certificates.iter().enumerate() {
+                    let ctrl: Vec<[f64; 2]> = c.mesh.cell_coords(e).iter().map(|x| [x[0], x[1]]).collect();
+                    let mut dense = f64::INFINITY;
+                    for k in 0..n * n {
+                        let xi = [(k % n) as f64 / (n - 1) as f64, (k / n) as f64 / (n - 1) as f64];
+                        let (_, j) = super::super::quad_map(p, c.mesh.spacing, &ctrl, xi).unwrap();
+                        dense = dense.min(j[0][0] * j[1][1] - j[0][1] * j[1][0]);
+                    }
+                    let range = cert.max_det - cert.min_det_lower;
+                    proptest::prop_assert!(cert.min_det_lower <= dense * (1.0 + 1e-12), "p={p} element {e}: {cert:?} dense {dense}");
+                    proptest::prop_assert!(cert.min_det_upper <= dense + 1e-2 * range, "p={p} element {e}: {cert:?} dense {dense}");
+                    proptest::prop_assert!(!cert.valid || dense > 0.0);
+                    proptest::prop_assert!(cert.valid, "a valid sector must be certified: p={p} element {e}: {cert:?}");
+                }
+                Ok(())
+            })
+            .unwrap();
+    }
 
     #[test]
     fn a_tangle_in_algorithm_2_is_said_once() {

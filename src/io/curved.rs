@@ -646,6 +646,8 @@ struct Raw {
     cells: Vec<(u64, usize, Vec<usize>, usize)>,
     /// `(tag, entity, order, nodes in Gmsh order, line)`.
     boundary: Vec<(u64, i64, usize, Vec<usize>, usize)>,
+    /// `(line, tag, z)` of the first node off z = 0 (an error in 2D).
+    off_plane: Option<(usize, u64, f64)>,
     has_nodes: bool,
     has_elements: bool,
 }
@@ -691,6 +693,7 @@ fn parse_raw(text: &str, dim: usize) -> Result<Raw, MshError> {
         nodes: Vec::new(),
         cells: Vec::new(),
         boundary: Vec::new(),
+        off_plane: None,
         has_nodes: false,
         has_elements: false,
     };
@@ -784,8 +787,10 @@ fn read_nodes(cur: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
         }
         for tag in tags {
             let mut x = [0.0f64; 3];
+            let mut z_line = 0;
             for c in &mut x {
                 let (t, line) = cur.token("a node coordinate")?;
+                z_line = line;
                 *c = t
                     .parse()
                     .map_err(|_| syntax(line, "a node coordinate", t))?;
@@ -801,6 +806,11 @@ fn read_nodes(cur: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
                 for _ in 0..edim {
                     cur.parse::<f64>("a parametric coordinate")?;
                 }
+            }
+            // a 2D mesh keeps x and y only: a node off z = 0 would move
+            // (reported once the elements show the file is a 2D one)
+            if raw.dim == 2 && x[2] != 0.0 && raw.off_plane.is_none() {
+                raw.off_plane = Some((z_line, tag, x[2]));
             }
             raw.nodes.push(x);
         }
@@ -878,6 +888,9 @@ fn read_elements(cur: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
 
 impl Raw {
     fn into_mesh<const D: usize>(mut self) -> Result<CurvedMesh<D>, MshError> {
+        if let Some((line, tag, z)) = self.off_plane {
+            return Err(MshError::OffPlane { line, tag, z });
+        }
         self.cells.sort_by_key(|c| c.0);
         self.boundary.sort_by_key(|b| b.0);
         let Some(&(_, p, _, _)) = self.cells.first() else {
@@ -928,35 +941,33 @@ impl Raw {
             tag_part.insert(*tag, part);
         }
         let prefix = if D == 2 { "curve" } else { "surface" };
-        let mut entity_part: HashMap<i64, usize> = HashMap::new();
+        // an entity in several named groups belongs to each
+        let mut entity_parts: HashMap<i64, Vec<usize>> = HashMap::new();
         let mut boundary = Vec::with_capacity(self.boundary.len());
         for (_, entity, order, nodes, line) in &self.boundary {
             if *order != p {
                 return Err(mismatch(*line, *order));
             }
-            let part = match entity_part.get(entity) {
-                Some(&part) => part,
-                None => {
-                    let phys = self
-                        .entity_physicals
-                        .get(&(bdim, *entity))
-                        .map(Vec::as_slice)
-                        .unwrap_or(&[]);
-                    let part = match phys.iter().find_map(|t| tag_part.get(t)) {
-                        Some(&part) => part,
-                        None => {
-                            part_names.push(format!("{prefix}{entity}"));
-                            part_names.len() - 1
-                        }
-                    };
-                    entity_part.insert(*entity, part);
-                    part
+            let parts = entity_parts.entry(*entity).or_insert_with(|| {
+                let phys = self.entity_physicals.get(&(bdim, *entity)).map(Vec::as_slice).unwrap_or(&[]);
+                let mut parts: Vec<usize> = Vec::new();
+                for &part in phys.iter().filter_map(|t| tag_part.get(t)) {
+                    if !parts.contains(&part) {
+                        parts.push(part);
+                    }
                 }
-            };
-            boundary.push(CurvedBoundary {
-                nodes: from_format(&face_perm, nodes),
-                part,
+                if parts.is_empty() {
+                    part_names.push(format!("{prefix}{entity}"));
+                    parts.push(part_names.len() - 1);
+                }
+                parts
             });
+            for &part in parts.iter() {
+                boundary.push(CurvedBoundary {
+                    nodes: from_format(&face_perm, nodes),
+                    part,
+                });
+            }
         }
         Ok(CurvedMesh {
             p,

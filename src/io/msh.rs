@@ -130,6 +130,16 @@ pub enum MshError {
         /// The node tag.
         tag: u64,
     },
+    /// A node of a 2D mesh off the plane z = 0: dropping z would move it.
+    #[error("line {line}: node {tag} has z = {z}, but a quad (2D) mesh must lie in the plane z = 0 (move or project the mesh there)")]
+    OffPlane {
+        /// Line of the coordinates.
+        line: usize,
+        /// Node tag.
+        tag: u64,
+        /// Its z.
+        z: f64,
+    },
     /// A required section is absent.
     #[error("missing section ${0}")]
     MissingSection(&'static str),
@@ -478,6 +488,26 @@ pub fn cell_type_of(text: &str) -> Option<(usize, i64)> {
     best
 }
 
+/// The node tags of ASCII MSH 4.1 text in file order, i.e. indexed like
+/// the nodes of [`parse_msh`] and [`parse_hex_msh`] (None if the `$Nodes`
+/// section does not scan: only for messages).
+pub fn node_tags(text: &str) -> Option<Vec<u64>> {
+    let mut lines = text.lines().skip_while(|l| l.trim() != "$Nodes").skip(1);
+    let blocks: usize = lines.next()?.split_whitespace().next()?.parse().ok()?;
+    let mut tags = Vec::new();
+    for _ in 0..blocks {
+        let count: usize = lines.next()?.split_whitespace().nth(3)?.parse().ok()?;
+        for _ in 0..count {
+            tags.push(lines.next()?.trim().parse().ok()?);
+        }
+        // the coordinate lines
+        for _ in 0..count {
+            lines.next()?;
+        }
+    }
+    Some(tags)
+}
+
 /// Reads an ASCII MSH 4.1 file (see [`parse_msh`]).
 pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
     parse_msh(&read_text(path)?)
@@ -613,6 +643,8 @@ struct RawMesh {
     quads: Vec<(u64, i64, [usize; 4])>,
     /// `(element tag, nodes)` of 8-node hexes.
     hexes: Vec<(u64, [usize; 8])>,
+    /// `(line, tag, z)` of the first node off the plane z = 0.
+    off_plane: Option<(usize, u64, f64)>,
     has_nodes: bool,
     has_elements: bool,
 }
@@ -629,6 +661,7 @@ impl RawMesh {
             lines: Vec::new(),
             quads: Vec::new(),
             hexes: Vec::new(),
+            off_plane: None,
             has_nodes: false,
             has_elements: false,
         }
@@ -645,19 +678,20 @@ impl RawMesh {
         Ok(())
     }
 
-    /// Lines become named boundary edges, quads cells; z is dropped.
+    /// Lines become named boundary edges, quads cells; z must be 0. A
+    /// line of a curve in several groups becomes one edge per group.
     fn into_quad_mesh(mut self) -> Result<QuadMesh, MshError> {
+        if let Some((line, tag, z)) = self.off_plane {
+            return Err(MshError::OffPlane { line, tag, z });
+        }
         self.lines.sort_by_key(|l| l.0);
         self.quads.sort_by_key(|q| q.0);
         let curves = self.lines.iter().map(|l| l.1);
-        let (part_names, curve_part) = self.resolve_parts(1, curves, "curve");
+        let (part_names, curve_parts) = self.resolve_parts(1, curves, "curve");
         let edges = self
             .lines
             .iter()
-            .map(|&(_, curve, nodes)| BoundaryEdge {
-                nodes,
-                part: curve_part[&curve],
-            })
+            .flat_map(|&(_, curve, nodes)| curve_parts[&curve].iter().map(move |&part| BoundaryEdge { nodes, part }))
             .collect();
         Ok(QuadMesh {
             nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
@@ -672,14 +706,11 @@ impl RawMesh {
         self.quads.sort_by_key(|q| q.0);
         self.hexes.sort_by_key(|h| h.0);
         let surfaces = self.quads.iter().map(|q| q.1);
-        let (part_names, surface_part) = self.resolve_parts(2, surfaces, "surface");
+        let (part_names, surface_parts) = self.resolve_parts(2, surfaces, "surface");
         let faces = self
             .quads
             .iter()
-            .map(|&(_, surface, nodes)| BoundaryFace {
-                nodes,
-                part: surface_part[&surface],
-            })
+            .flat_map(|&(_, surface, nodes)| surface_parts[&surface].iter().map(move |&part| BoundaryFace { nodes, part }))
             .collect();
         Ok(HexMesh {
             nodes: self.nodes,
@@ -689,15 +720,16 @@ impl RawMesh {
         })
     }
 
-    /// Part names and the part of every entity in `entities` (of dimension
-    /// `dim`, the boundary dimension): the named physical groups of that
-    /// dimension by tag, then `<prefix><tag>` for entities in none of them.
+    /// Part names and the parts of every entity in `entities` (of
+    /// dimension `dim`, the boundary dimension): the named physical groups
+    /// of that dimension by tag, then `<prefix><tag>` for entities in none
+    /// of them. An entity in several named groups belongs to each.
     fn resolve_parts(
         &self,
         dim: usize,
         entities: impl Iterator<Item = i64>,
         prefix: &str,
-    ) -> (Vec<String>, HashMap<i64, usize>) {
+    ) -> (Vec<String>, HashMap<i64, Vec<usize>>) {
         let mut named: Vec<&(i64, i64, String)> = self
             .physical_names
             .iter()
@@ -723,14 +755,17 @@ impl RawMesh {
                 .get(&(dim, entity))
                 .map(Vec::as_slice)
                 .unwrap_or(&[]);
-            let part = match physicals.iter().find_map(|t| tag_part.get(t)) {
-                Some(&p) => p,
-                None => {
-                    names.push(format!("{prefix}{entity}"));
-                    names.len() - 1
+            let mut parts: Vec<usize> = Vec::new();
+            for &p in physicals.iter().filter_map(|t| tag_part.get(t)) {
+                if !parts.contains(&p) {
+                    parts.push(p);
                 }
-            };
-            entity_part.insert(entity, part);
+            }
+            if parts.is_empty() {
+                names.push(format!("{prefix}{entity}"));
+                parts.push(names.len() - 1);
+            }
+            entity_part.insert(entity, parts);
         }
         (names, entity_part)
     }
@@ -869,7 +904,11 @@ fn read_node_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> 
     }
     let extra = if parametric == 1 { dim } else { 0 };
     for tag in tags {
-        raw.nodes.push(read_node_coords(cur, tag, extra)?);
+        let (x, z_line) = read_node_coords(cur, tag, extra)?;
+        if x[2] != 0.0 && raw.off_plane.is_none() {
+            raw.off_plane = Some((z_line, tag, x[2]));
+        }
+        raw.nodes.push(x);
     }
     Ok(())
 }
@@ -877,10 +916,13 @@ fn read_node_block(cur: &mut Cursor, raw: &mut RawMesh) -> Result<(), MshError> 
 /// `x y z` of node `tag` plus `extra` parametric values; rejects NaN/inf.
 /// Expected-item messages in per-value loops are static strings: formatting
 /// one per token would dominate the time on large files.
-fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<Point3, MshError> {
+/// Returns the coordinates and the line of z.
+fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<(Point3, usize), MshError> {
     let mut xyz = [0.0f64; 3];
+    let mut z_line = 0;
     for x in &mut xyz {
         let (text, line) = cur.token("a node coordinate")?;
+        z_line = line;
         *x = text
             .parse()
             .map_err(|_| syntax(line, &format!("a coordinate of node {tag}"), text))?;
@@ -895,7 +937,7 @@ fn read_node_coords(cur: &mut Cursor, tag: u64, extra: u64) -> Result<Point3, Ms
     for _ in 0..extra {
         cur.parse::<f64>("a parametric node coordinate")?;
     }
-    Ok(xyz)
+    Ok((xyz, z_line))
 }
 
 /// `$Elements`: header `numBlocks numElements minTag maxTag`, then blocks.
@@ -1097,6 +1139,7 @@ impl<'a> Cursor<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::curved::CurvedMesh;
 
     /// A 5×4 box with interior and boundary nodes moved by a smooth
     /// non-affine map, and coordinates that stress round-trip printing.
@@ -1348,6 +1391,31 @@ mod tests {
                 &["non-finite", "node 2", bad],
             );
         }
+    }
+
+    #[test]
+    fn rejects_a_2d_node_off_the_plane() {
+        // node 2 at (1, 0) given z = 0.25: not dropped silently
+        assert_rejected("\n1 0 0\n", "\n1 0 0.25\n", &["node 2", "z = 0.25", "z = 0"]);
+        let (text, _) = corrupted("\n1 0 0\n", "\n1 0 0.25\n");
+        let e = CurvedMesh::<2>::parse_msh(&text).err().expect("off the plane").to_string();
+        assert!(e.contains("node 2 has z = 0.25"), "{e}");
+    }
+
+    /// The cylinder's wall curve also in a second group `ring` (listed
+    /// first on the entity): its lines belong to both groups.
+    #[test]
+    fn an_entity_in_two_groups_belongs_to_both() {
+        let text = include_str!("../../tests/data/cylinder_bl_coarse.msh")
+            .replacen("3\n1 1 \"wall\"", "4\n1 4 \"ring\"\n1 1 \"wall\"", 1)
+            .replacen("1e-07 1 1 2 5 -5", "1e-07 2 4 1 2 5 -5", 1);
+        let m = parse_msh(&text).unwrap();
+        assert_eq!(m.part_names, ["wall", "farfield", "ring"]);
+        let count = |part: usize| m.edges.iter().filter(|e| e.part == part).count();
+        assert_eq!((count(0), count(2)), (12, 12));
+        let wall: Vec<[usize; 2]> = m.edges.iter().filter(|e| e.part == 0).map(|e| e.nodes).collect();
+        let ring: Vec<[usize; 2]> = m.edges.iter().filter(|e| e.part == 2).map(|e| e.nodes).collect();
+        assert_eq!(wall, ring);
     }
 
     #[test]
