@@ -282,7 +282,7 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
             }
         }
         let node_ptr: Vec<u32> = (0..nodes).filter(|&i| free[i] > 0).map(|i| first[i]).chain([n as u32]).collect();
-        let matrix = Csr { nrows: n, ncols: n, val: vec![0.0; col.len()], row_ptr, col, runs: None }.with_runs(&node_ptr);
+        let matrix = Csr { nrows: n, ncols: n, val: vec![0.0; col.len()], row_ptr, col };
         DivCurlSystem {
             cells: cells.to_vec(),
             colours: colour_blocks(cells, nodes, (cells.len() / 64).clamp(8, CELLS_PER_BLOCK)),

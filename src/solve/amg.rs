@@ -474,7 +474,7 @@ fn tentative(node_ptr: &[u32], agg: &[u32], count: usize, null: &[f64], k: usize
             }
         }
     }
-    let mut t = Csr { nrows: n, ncols: nc, row_ptr: Vec::with_capacity(n + 1), col: Vec::new(), val: Vec::new(), runs: None };
+    let mut t = Csr { nrows: n, ncols: nc, row_ptr: Vec::with_capacity(n + 1), col: Vec::new(), val: Vec::new() };
     t.row_ptr.push(0);
     for v in 0..nodes {
         let g = agg[v] as usize;
