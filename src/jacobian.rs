@@ -2,7 +2,7 @@
 //!
 //! The user gives an unnormalised field g(x, t) > 0 with g(·, 0) = 1; the
 //! method uses f = c(t) g with `c(t) = (1/|Ω₀|) ∫_{Ω_t} 1/g dx`, so that
-//! `∫_{Ω_t} 1/f = |Ω₀|` for every t (DESIGN.md §1). The divergence data of
+//! `∫_{Ω_t} 1/f = |Ω₀|` for every t (docs/METHOD.md §1). The divergence data of
 //! the LSFEM system is then `−∂_t(1/f) = c'/(c² g) + g_t/(c g²)` with c'
 //! from the transport theorem, which makes `∫ div u = ∮ u·n` hold.
 

@@ -56,7 +56,7 @@ fn quarter_disk_dirichlet_is_valid_but_j_drifts() {
     for &(i, dist) in &d.boundary_distances() {
         assert!(dist < 1e-10, "node {i} off the circle by {dist}");
     }
-    // DESIGN.md: the over-determined Dirichlet data lets J/f drift
+    // docs/METHOD.md §3: the over-determined Dirichlet data lets J/f drift
     // (measured [0.173, 1.558]); sliding must be much closer to f.
     let jf = d.jf_now().unwrap();
     let r = jf_stats(&jf, &vec![1.0; jf.len()]);

@@ -2,7 +2,7 @@
 //!
 //! Every pseudo-time step solves `div u = −∂_t(1/f)`, `curl u = 0` by
 //! LSFEM on the current mesh and moves every node with `dφ/dt = f u`.
-//! Boundary parts decide the constraints (DESIGN.md §1):
+//! Boundary parts decide the constraints (docs/METHOD.md §3):
 //! - `slip`: `u·n = 0`, the node glides along its wall and is put back
 //!   onto it after the step;
 //! - `move` to a target shape: the boundary Γ_t is the blend
