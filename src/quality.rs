@@ -47,14 +47,27 @@ pub fn scaled_jacobian(p: &[Point2; 4]) -> f64 {
 }
 
 /// Cells of `mesh`'s connectivity, at positions `nodes`, whose det J is
-/// not positive at some corner (a bilinear cell is valid iff all four are).
+/// not certainly positive at some corner (a bilinear cell is valid iff
+/// all four are).
 pub fn invalid_cells(mesh: &QuadMesh, nodes: &[Point2]) -> Vec<usize> {
     mesh.cells
         .par_iter()
         .enumerate()
-        .filter(|(_, c)| corner_jacobians(&c.map(|n| nodes[n])).iter().any(|&d| !(d > 0.0)))
+        .filter(|(_, c)| !(0..4).all(|a| corner_certainly_positive(&c.map(|n| nodes[n]), a)))
         .map(|(i, _)| i)
         .collect()
+}
+
+/// Whether det J at corner `a` is positive beyond the rounding of its
+/// computation. Each edge component rounds by at most u (relative), each
+/// of the two products and their difference by u: the computed value is
+/// within 4u·(|e₁ₓe₂ᵧ| + |e₁ᵧe₂ₓ|) + O(u²) of the exact one, and 5u bounds
+/// that. The bound is relative to the products, so it does not depend on
+/// where the cell is or on its size.
+fn corner_certainly_positive(p: &[Point2; 4], a: usize) -> bool {
+    let (e1, e2) = corner_edges(p, a);
+    let (x, y) = (e1[0] * e2[1], e1[1] * e2[0]);
+    x - y > 5.0 * f64::EPSILON / 2.0 * (x.abs() + y.abs())
 }
 
 /// Validity and shape figures of a hex mesh: det J bounds from the
@@ -189,6 +202,24 @@ pub fn jf_stats(ratios: &[f64], start_areas: &[f64]) -> JfStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_corner_within_rounding_of_zero_is_not_certified() {
+        // corner 0 between (1, 1) and (1, 1 + 2⁻⁵²): det J = 2⁻⁵², below
+        // the rounding bound of its two products of about 1
+        let flat = [[0.0, 0.0], [1.0, 1.0], [0.5, 2.0], [1.0, 1.0 + f64::EPSILON]];
+        assert!(corner_jacobians(&flat)[0] > 0.0);
+        assert!(!corner_certainly_positive(&flat, 0));
+        // a right angle is certain wherever the cell is and whatever its
+        // size, and so is a 1 × 1e-6 sliver at 1e6 from the origin
+        for (shift, scale) in [(0.0, 1.0), (1e6, 1.0), (0.0, 1e-9), (1e6, 1e-3)] {
+            let at = |x: f64, y: f64| [shift + scale * x, shift + scale * y];
+            let square = [at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)];
+            assert!((0..4).all(|a| corner_certainly_positive(&square, a)), "{shift} {scale}");
+        }
+        let thin = [[1e6, 1e6], [1e6 + 1.0, 1e6], [1e6 + 1.0, 1e6 + 1e-6], [1e6, 1e6 + 1e-6]];
+        assert!((0..4).all(|a| corner_certainly_positive(&thin, a)));
+    }
 
     #[test]
     fn rectangle_and_parallelogram_figures() {
