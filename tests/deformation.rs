@@ -2,6 +2,8 @@
 //! figures the issue asks for: validity, J/f bounds, boundary accuracy,
 //! and convergence of J/f under refinement.
 
+mod common;
+use common::GAUSS5;
 use deformesh::case::{Case, DEMO_CASE};
 use deformesh::deform::{Deformation, Integrator};
 use deformesh::expr::Expr;
@@ -144,15 +146,6 @@ fn expression_field_is_normalised_on_the_moving_domain() {
     let q = mesh_quality(&d.mesh);
     assert!(q.invalid_cells.is_empty());
 }
-
-/// The 5-point Gauss–Legendre rule on [0, 1]: (point, weight).
-const GAUSS5: [(f64, f64); 5] = [
-    (0.04691007703066802, 0.11846344252809464),
-    (0.23076534494715845, 0.23931433524968315),
-    (0.5, 0.28444444444444444),
-    (0.7692346550528415, 0.23931433524968315),
-    (0.9530899229693319, 0.11846344252809464),
-];
 
 /// Runs a case text to t = 1 and checks validity and that every node of
 /// every moving part lies on its target within 1e-10; returns J/f range.

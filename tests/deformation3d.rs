@@ -1,6 +1,8 @@
 //! Algorithm 1 on hexahedral meshes: the seed's 3D figures, with the
 //! figures the issue asks for.
 
+mod common;
+use common::GAUSS5;
 use deformesh::case::{AnySetup, Case, Setup};
 use deformesh::deform::Deformation3;
 use deformesh::hexquality::{corner_det_j, det_j};
@@ -176,13 +178,6 @@ fn expression_field_in_3d_is_normalised() {
     let field = deformesh::jacobian::JacobianField::expression(deformesh::expr::Expr::parse("0.5 + z", &deformesh::jacobian::EXPR_VARS).unwrap());
     // not the 2×2×2 Gauss rule `normalise` uses (that would only repeat its
     // sum): 5×5×5 Gauss–Legendre per cell, exact to degree 9
-    const GAUSS5: [(f64, f64); 5] = [
-        (0.04691007703066802, 0.11846344252809464),
-        (0.23076534494715845, 0.23931433524968315),
-        (0.5, 0.28444444444444444),
-        (0.7692346550528415, 0.23931433524968315),
-        (0.9530899229693319, 0.11846344252809464),
-    ];
     let mut integral = 0.0;
     for c in 0..d.mesh.num_cells() {
         let p = d.mesh.cell_coords(c);

@@ -1,4 +1,5 @@
-//! Helpers shared by the tests that run the real Gmsh and VTK.
+//! Helpers shared by the integration tests: running the real Gmsh and
+//! VTK, and an independent quadrature.
 //!
 //! The Python interpreter is `$DEFORMESH_PYTHON`, else `.venv/bin/python` in
 //! the crate; `scripts/test.sh` sets the latter up.
@@ -98,3 +99,14 @@ pub fn gmsh_agrees<const D: usize>(file: &Path, ty: i64, count: usize) -> Agreem
     a
 }
 
+
+/// The 5-point Gauss–Legendre rule on [0, 1]: (point, weight), exact to
+/// degree 9 — not the 2-point rule `normalise` uses, so an integral with it
+/// checks that sum rather than repeating it.
+pub const GAUSS5: [(f64, f64); 5] = [
+    (0.04691007703066802, 0.11846344252809464),
+    (0.23076534494715845, 0.23931433524968315),
+    (0.5, 0.28444444444444444),
+    (0.7692346550528415, 0.23931433524968315),
+    (0.9530899229693319, 0.11846344252809464),
+];
