@@ -527,7 +527,7 @@ impl Case {
                 }
                 let steps = h.steps.unwrap_or((self.time.steps / 2).max(4));
                 let flow = DeformOptions { integrator: self.time.integrator, div_weight: self.time.div_weight, solver: self.time.solver, tolerance: self.time.tolerance, ..Default::default() };
-                Some(CurveOptions { order: h.order, spacing: h.spacing, steps, flow, ..Default::default() })
+                Some(CurveOptions { order: h.order, spacing: h.spacing, steps: Some(steps), flow, ..Default::default() })
             }
         };
         let mut output = self.output.clone();

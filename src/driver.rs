@@ -544,6 +544,10 @@ pub struct CurveReport {
     pub steps: usize,
     /// Halved steps.
     pub halved_steps: usize,
+    /// Runs of Algorithm 2: more than 1 when its first run, with the
+    /// fewest steps, left an element not certified valid (see
+    /// [`crate::highorder::curve::AUTO_STEPS`]).
+    pub algorithm2_runs: usize,
     /// Algorithm 2's linear solves.
     pub solver: SolverReport,
     /// Seconds of Algorithm 2 and of the certification.
@@ -722,6 +726,7 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         spacing: c.mesh.spacing,
         steps: c.stats.steps,
         halved_steps: c.stats.halved,
+        algorithm2_runs: c.attempts,
         solver: c.solver.clone(),
         algorithm2_s: c.seconds.0,
         certify_s: c.seconds.1,

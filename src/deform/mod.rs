@@ -23,6 +23,7 @@
 mod chains;
 mod patches;
 pub mod refine;
+pub mod strain;
 
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
@@ -405,11 +406,24 @@ pub struct DeformOptions {
     pub solver: SolverChoice,
     /// Relative residual at which an iterative solver stops.
     pub tolerance: f64,
+    /// Step control: a step is cut so that no cell corner's Jacobian
+    /// changes by more than this fraction in it ([`strain::max_step`]);
+    /// the nominal step 1/`steps` stays the largest. None: fixed steps
+    /// (halved only on inversion).
+    pub max_strain: Option<f64>,
 }
 
 impl Default for DeformOptions {
     fn default() -> Self {
-        DeformOptions { steps: 40, integrator: Integrator::Euler, div_weight: 1.0, max_halvings: 12, solver: SolverChoice::Auto, tolerance: crate::solve::DEFAULT_TOLERANCE }
+        DeformOptions {
+            steps: 40,
+            integrator: Integrator::Euler,
+            div_weight: 1.0,
+            max_halvings: 12,
+            solver: SolverChoice::Auto,
+            tolerance: crate::solve::DEFAULT_TOLERANCE,
+            max_strain: None,
+        }
     }
 }
 
@@ -436,6 +450,13 @@ pub struct Deformation<M: Q1Mesh<D, N> = crate::mesh::QuadMesh, const D: usize =
     bvel: Vec<[f64; D]>,
     u: Vec<[f64; D]>,
     k1: Vec<[f64; D]>,
+    // k1 is the velocity at the current nodes and t: a retried step
+    // (same nodes, same t) reuses it instead of solving again
+    k1_current: bool,
+    // with the step control: the largest change of a corner's Jacobian
+    // in the step just tried, and the step to try next (∞ at first)
+    strain: f64,
+    next_step: f64,
     stage: Vec<[f64; D]>,
     next: Vec<[f64; D]>,
     x: Vec<f64>,
@@ -498,6 +519,9 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             bvel: vec![[0.0; D]; n],
             u: vec![[0.0; D]; n],
             k1: vec![[0.0; D]; n],
+            k1_current: false,
+            strain: 0.0,
+            next_step: f64::INFINITY,
             stage: mesh.nodes().to_vec(),
             next: mesh.nodes().to_vec(),
             saved_state: boundary.state().clone(),
@@ -516,6 +540,8 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.mesh.nodes_mut().clone_from(&self.start);
         self.boundary.state_mut().clone_from(&self.initial_state);
         self.t = 0.0;
+        self.k1_current = false;
+        self.next_step = f64::INFINITY;
     }
 
     /// The boundary parts.
@@ -586,7 +612,10 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         }
         while self.t < 1.0 - 1e-12 {
             let target = stops.peek().copied().unwrap_or(1.0).min(1.0);
-            let h = dt.min(target - self.t);
+            let mut h = dt.min(target - self.t);
+            if self.options.max_strain.is_some() {
+                h = h.min(self.next_step);
+            }
             self.step(h)?;
             if (self.t - target).abs() < 1e-12 {
                 self.t = target;
@@ -604,45 +633,53 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         Ok(())
     }
 
-    /// One step of size `h` (halved until no cell inverts).
+    /// One step of size at most `h`: cut by the step control
+    /// ([`DeformOptions::max_strain`]), then halved until no cell inverts
+    /// and, with the step control, until no corner's Jacobian changed by
+    /// more than it allows (on the last try only validity counts).
     pub fn step(&mut self, h: f64) -> Result<(), DeformError> {
         let mut h = h;
         for attempt in 0..=self.options.max_halvings {
-            match self.try_step(h)? {
-                None => {
+            let control = attempt < self.options.max_halvings;
+            match self.try_step(h, control)? {
+                Ok(_) => {
                     self.stats.steps += 1;
                     return Ok(());
                 }
-                Some(bad) if attempt == self.options.max_halvings => {
-                    return Err(DeformError::Tangled { t: self.t, dt: h, cells: bad });
+                Err((bad, tried)) if attempt == self.options.max_halvings => {
+                    return Err(DeformError::Tangled { t: self.t, dt: tried, cells: bad });
                 }
-                Some(_) => {
+                Err((bad, tried)) => {
                     self.stats.halved += 1;
-                    h *= 0.5;
+                    h = tried * if bad.is_empty() { self.strain_factor().min(0.5) } else { 0.5 };
                 }
             }
         }
         unreachable!("the loop returns on its last attempt")
     }
 
-    /// Tries a step; on success updates the state and returns None, else
-    /// leaves the state untouched and returns the cells that would invert.
-    fn try_step(&mut self, h: f64) -> Result<Option<Vec<usize>>, DeformError> {
+    /// Tries a step of at most `h`; on success updates the state and
+    /// returns the step taken, else leaves the state untouched and returns
+    /// the cells that would invert (none if only the step control refused
+    /// it) with the step tried.
+    fn try_step(&mut self, h: f64, control: bool) -> Result<Result<f64, (Vec<usize>, f64)>, DeformError> {
         self.saved_state.clone_from(self.boundary.state());
         let nodes = std::mem::take(self.mesh.nodes_mut());
         let result = self.advance(&nodes, self.t, h);
         *self.mesh.nodes_mut() = nodes;
         let failure = match result {
-            Ok(()) => {
+            Ok(h) => {
                 let bad = self.mesh.invalid_cells(&self.next);
-                if bad.is_empty() {
+                if bad.is_empty() && !(self.too_strained() && control) {
                     std::mem::swap(self.mesh.nodes_mut(), &mut self.next);
                     self.t += h;
-                    return Ok(None);
+                    self.next_step = h * self.strain_factor().clamp(1.0, 2.0);
+                    self.k1_current = false;
+                    return Ok(Ok(h));
                 }
-                Ok(Some(bad))
+                Ok(Err((bad, h)))
             }
-            Err(StepFailure::Inverted(cell)) => Ok(Some(vec![cell])),
+            Err(StepFailure::Inverted(cell, h)) => Ok(Err((vec![cell], h))),
             Err(StepFailure::Fatal(e)) => Err(e),
         };
         // the boundary parameters moved with the rejected step: restore them
@@ -650,11 +687,44 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         failure
     }
 
+    /// With the step control on, whether the step just computed changed
+    /// some corner's Jacobian by more than it allows. This sees what the
+    /// velocity alone does not: the put-back onto curved walls, which
+    /// squeezes thin layers by the square of the step (measured on a 1e-5
+    /// layer at p = 3: a ratio of 9.6 in one step, 3.1 in two; 0.90–1.11
+    /// on the cylinder and ball meshes of the benchmarks in one step).
+    fn too_strained(&mut self) -> bool {
+        let Some(c) = self.options.max_strain else { return false };
+        let (lo, hi) = strain::corner_ratio_range(self.mesh.cells(), self.mesh.nodes(), &self.next);
+        self.strain = (1.0 - lo).max(hi - 1.0);
+        self.strain > c
+    }
+
+    /// By how much to scale the step just tried so that its strain would
+    /// meet the step control, with a margin: the change grows like the
+    /// square of the step where the put-back dominates, so the square
+    /// root of the ratio (bounded to 0.1 … 2).
+    fn strain_factor(&self) -> f64 {
+        match self.options.max_strain {
+            Some(c) if self.strain > 0.0 => (0.9 * (c / self.strain).sqrt()).clamp(0.1, 2.0),
+            Some(_) => 2.0,
+            None => 1.0,
+        }
+    }
+
     /// Writes into `self.next` the positions after one step of the
-    /// integrator from `nodes` at time t.
-    fn advance(&mut self, nodes: &[[f64; D]], t: f64, h: f64) -> Result<(), StepFailure> {
-        self.node_velocity(nodes, t)?;
-        self.k1.copy_from_slice(&self.u);
+    /// integrator from `nodes` at time t, of size `h` or less if the strain
+    /// limit cuts it; returns the step taken.
+    fn advance(&mut self, nodes: &[[f64; D]], t: f64, h: f64) -> Result<f64, StepFailure> {
+        if !self.k1_current {
+            self.node_velocity(nodes, t).map_err(|e| e.at(h))?;
+            self.k1.copy_from_slice(&self.u);
+            self.k1_current = true;
+        }
+        let h = match self.options.max_strain {
+            Some(c) => strain::max_step(self.mesh.cells(), nodes, &self.k1, c, h),
+            None => h,
+        };
         for ((o, x), k) in self.next.iter_mut().zip(nodes).zip(&self.k1) {
             *o = std::array::from_fn(|i| x[i] + h * k[i]);
         }
@@ -665,13 +735,13 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             stage.copy_from_slice(&self.next);
             let r = self.node_velocity(&stage, t + h);
             self.stage = stage;
-            r?;
+            r.map_err(|e| e.at(h))?;
             for ((o, x), (a, b)) in self.next.iter_mut().zip(nodes).zip(self.k1.iter().zip(&self.u)) {
                 *o = std::array::from_fn(|i| x[i] + 0.5 * h * (a[i] + b[i]));
             }
         }
         self.boundary.put_back(&mut self.next, t + h);
-        Ok(())
+        Ok(h)
     }
 
     /// Solves the LSFEM system at positions `nodes`, time t, and stores the
@@ -691,7 +761,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.system
             .assemble(nodes, &self.constraints, |x| norm.div_data(field, lift(x)))
             .map_err(|e| match e {
-                LsfemError::Inverted { cell, .. } => StepFailure::Inverted(cell),
+                LsfemError::Inverted { cell, .. } => StepFailure::Inverted(cell, 0.0),
                 other => StepFailure::Fatal(other.into()),
             })?;
         self.stats.assembly += t0.elapsed();
@@ -726,10 +796,21 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
 
 /// Why a step attempt failed.
 enum StepFailure {
-    /// A cell inverted during a stage: retry with a smaller step.
-    Inverted(usize),
+    /// A cell inverted during a stage of a step of this size: retry with
+    /// a smaller step.
+    Inverted(usize, f64),
     /// Anything else: give up.
     Fatal(DeformError),
+}
+
+impl StepFailure {
+    /// The failure of a step of size h (an inversion in a stage records it).
+    fn at(self, h: f64) -> Self {
+        match self {
+            StepFailure::Inverted(cell, _) => StepFailure::Inverted(cell, h),
+            fatal => fatal,
+        }
+    }
 }
 
 impl From<DeformError> for StepFailure {

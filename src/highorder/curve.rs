@@ -24,9 +24,12 @@ pub struct CurveOptions {
     pub order: usize,
     /// Where the element nodes sit.
     pub spacing: Spacing,
-    /// Pseudo-time steps of Algorithm 2 (the motion is local: fewer than
-    /// Algorithm 1 needs; the paper doubles the step).
-    pub steps: usize,
+    /// Pseudo-time steps of Algorithm 2 (the paper doubles Algorithm 1's
+    /// step); None: as few as `step_change` allows.
+    pub steps: Option<usize>,
+    /// Without `steps`, the step control: the largest relative change of
+    /// a fine cell's corner Jacobian in one step ([`CURVE_STEP_CHANGE`]).
+    pub step_change: f64,
     /// Options of the flow (integrator, solver); `steps` above wins.
     pub flow: DeformOptions,
     /// Boundary samples per element edge direction for the geometric
@@ -51,10 +54,38 @@ pub struct CurveOptions {
 /// 1e-3 leaves room for shapes typed with 4–5 significant digits.
 pub const DEFAULT_SHAPE_TOLERANCE: f64 = 1e-3;
 
+/// The step control of Algorithm 2 when no step count is given: no step
+/// may change the Jacobian at a corner of a fine Q1 cell by more than this
+/// fraction, as predicted from the velocity before the step and as
+/// measured after it, put-back onto the walls included
+/// ([`crate::deform::strain`], [`DeformOptions::max_strain`]). The motion
+/// of Algorithm 2 is local and small: on the benchmark cylinder and ball
+/// meshes one step takes the whole way (corner ratios 0.90–1.11), while a
+/// 1e-5 boundary layer at p = 3 gets 6 steps.
+pub const CURVE_STEP_CHANGE: f64 = 0.25;
+
+/// Without a given step count, the largest steps of the successive runs
+/// of Algorithm 2 (as step counts: 1/1, 1/2, 1/4, 1/8): the next run
+/// only if the last left an element not certified valid. Eight steps are
+/// the most, near the 10 that were the default before the step control.
+pub const AUTO_STEPS: [usize; 4] = [1, 2, 4, 8];
+
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: 10, flow: DeformOptions::default(), samples: 16, dirichlet: false, shape_tolerance: DEFAULT_SHAPE_TOLERANCE }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, shape_tolerance: DEFAULT_SHAPE_TOLERANCE }
     }
+}
+
+/// An error and its causes, joined by ": " (so that a solver's reason is
+/// not lost where the error is shown as text, not as a chain).
+fn with_causes(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
+    text
 }
 
 /// Errors of curving a mesh.
@@ -70,7 +101,7 @@ pub enum CurveError {
     #[error(transparent)]
     Subdivide(#[from] crate::deform::refine::SubdivideError),
     /// Algorithm 2 failed (a tangle, an unreachable target, ...).
-    #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {0}")]
+    #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {}", with_causes(.0))]
     Deform(DeformError),
     /// A node of a curved part is off its shape by more than the
     /// tolerance: the shape does not match the mesh (`after` false), or a
@@ -227,9 +258,13 @@ pub struct Curved<const D: usize> {
     pub certificates: Vec<Certificate>,
     /// Summary figures.
     pub quality: CurvedQuality,
-    /// Counters and timings of Algorithm 2.
+    /// Counters and timings of Algorithm 2 (its last run).
     pub stats: RunStats,
-    /// Its linear solves.
+    /// Runs of Algorithm 2: more than one when, without a given step
+    /// count, an element was not certified valid and the run was redone
+    /// with shorter steps ([`AUTO_STEPS`]).
+    pub attempts: usize,
+    /// Its linear solves (the last run).
     pub solver: crate::deform::SolverReport,
     /// Seconds spent in Algorithm 2, in certification.
     pub seconds: (f64, f64),
@@ -303,9 +338,6 @@ where
     let p = opts.order;
     let clock = Instant::now();
     let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?)?;
-    // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
-    // a few thousand nodes, as for Algorithm 1
-    let flow = DeformOptions { steps: opts.steps.max(1), ..opts.flow.clone() };
     if opts.dirichlet {
         for part in parts2.iter_mut() {
             if let PartKind::Move { mode, .. } = &mut part.kind {
@@ -313,20 +345,41 @@ where
             }
         }
     }
-    let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
-    def.run(&[], |_| {}, |d| progress(d.t, &d.stats))?;
-    let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
-    let alg2 = clock.elapsed().as_secs_f64();
-    let mesh = CurvedMesh {
-        p,
-        spacing: opts.spacing,
-        nodes: def.mesh.mesh.nodes().to_vec(),
-        cells: sub.elements.clone(),
-        boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
-        part_names: coarse.names().to_vec(),
+    // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
+    // a few thousand nodes, as for Algorithm 1
+    let schedule: Vec<DeformOptions> = match opts.steps {
+        Some(n) => vec![DeformOptions { steps: n.max(1), max_strain: None, ..opts.flow.clone() }],
+        None => AUTO_STEPS.iter().map(|&n| DeformOptions { steps: n, max_strain: Some(opts.step_change), ..opts.flow.clone() }).collect(),
     };
+    let mut attempts = 0;
+    let mut certify_s = 0.0;
+    let (def, mesh, certificates, mut quality) = loop {
+        let flow = schedule[attempts].clone();
+        attempts += 1;
+        let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
+        def.run(&[], |_| {}, |d| progress(d.t, &d.stats))?;
+        let mesh = CurvedMesh {
+            p,
+            spacing: opts.spacing,
+            nodes: def.mesh.mesh.nodes().to_vec(),
+            cells: sub.elements.clone(),
+            boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
+            part_names: coarse.names().to_vec(),
+        };
+        let t0 = Instant::now();
+        let (certificates, quality) = certify_mesh(&mesh)?;
+        certify_s += t0.elapsed().as_secs_f64();
+        // the Q1 cells stay valid with few steps, but the error of a long
+        // Euler step can still bend an element of a thin layer invalid
+        // (measured: a 1e-5 layer at p = 3 in one step): then again with
+        // shorter steps
+        if quality.invalid_elements.is_empty() || attempts == schedule.len() {
+            break (def, mesh, certificates, quality);
+        }
+    };
+    let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+    let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
-    let (certificates, mut quality) = certify_mesh(&mesh)?;
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
     let n1 = p + 1;
     // corners of a tensor-ordered boundary element, in cyclic order
@@ -340,7 +393,7 @@ where
     quality.boundary_node_distance = moved_distance.max(node_distance(&mesh, &parts2));
     quality.boundary_sample_distance = sampled_distance(&mesh, &parts2, opts.samples)?;
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
-    Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), solver: def.solver_report(), seconds: (alg2, clock.elapsed().as_secs_f64()) })
+    Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), attempts, solver: def.solver_report(), seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
 }
 
 /// Per moving (or curved slip) part, the largest relative change of the
@@ -515,7 +568,7 @@ mod tests {
                         },
                     })
                     .collect();
-                let opts = CurveOptions { order: p, steps: 2, ..Default::default() };
+                let opts = CurveOptions { order: p, steps: Some(2), ..Default::default() };
                 let c = curve(&m, &parts, &opts).map_err(|e| proptest::test_runner::TestCaseError::fail(e.to_string()))?;
                 let n = 41;
                 for (e, cert) in c.certificates.iter().enumerate() {
@@ -548,5 +601,13 @@ mod tests {
         let chain = format!("{:#}", anyhow::Error::from(e));
         assert_eq!(chain.matches("tangles").count(), 1, "{chain}");
         assert!(chain.starts_with("Algorithm 2 (carrying"), "{chain}");
+    }
+
+    #[test]
+    fn a_solver_failure_says_why() {
+        let e = CurveError::from(DeformError::Solve(crate::solve::SolveError::NoConvergence(1000)));
+        let chain = format!("{:#}", anyhow::Error::from(e));
+        assert!(chain.ends_with("the linear solver failed: conjugate gradients did not converge in 1000 iterations"), "{chain}");
+        assert_eq!(chain.matches("converge").count(), 1, "{chain}");
     }
 }

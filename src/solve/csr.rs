@@ -6,6 +6,7 @@
 //! order, so a run gives the same iterates on one core or many.
 
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Rows per parallel task: large enough to amortise scheduling, small
 /// enough to balance two cores on the smallest meshes we parallelise.
@@ -144,37 +145,47 @@ impl Csr {
     /// The product A B (rows of the result in parallel, each row gathered
     /// in a dense accumulator of the task's own).
     pub fn matmul(&self, other: &Csr) -> Csr {
+        self.matmul_rows(0..self.nrows, other)
+    }
+
+    /// The rows `rows` of A B (numbered from 0): a product taken in row
+    /// blocks needs memory for one block only.
+    pub fn matmul_rows(&self, rows: Range<usize>, other: &Csr) -> Csr {
         assert_eq!(self.ncols, other.nrows, "inner dimensions of a sparse product");
-        let ncols = other.ncols;
-        let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..self.nrows.div_ceil(ROWS_PER_TASK))
+        let first = rows.start;
+        Csr::accumulate_rows(rows.len(), other.ncols, |i, acc| {
+            let (ca, va) = self.row(first + i);
+            for (&k, &a) in ca.iter().zip(va) {
+                let (cb, vb) = other.row(k as usize);
+                for (&j, &b) in cb.iter().zip(vb) {
+                    acc.add(j, a * b);
+                }
+            }
+        })
+    }
+
+    /// Builds a matrix whose row i sums what `row(i, acc)` adds to `acc`
+    /// (entries named twice are summed, columns come out sorted): rows
+    /// in parallel, each gathered in a dense accumulator of its task.
+    pub fn accumulate_rows<F: Fn(usize, &mut RowAccumulator) + Sync>(nrows: usize, ncols: usize, row: F) -> Csr {
+        let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nrows.div_ceil(ROWS_PER_TASK))
             .into_par_iter()
             .map(|c| {
-                let rows = c * ROWS_PER_TASK..((c + 1) * ROWS_PER_TASK).min(self.nrows);
-                let mut acc = vec![0.0; ncols];
-                let mut seen = vec![u32::MAX; ncols];
-                let (mut lens, mut col, mut val) = (Vec::with_capacity(rows.len()), Vec::new(), Vec::new());
+                let rows = c * ROWS_PER_TASK..((c + 1) * ROWS_PER_TASK).min(nrows);
+                let mut acc = RowAccumulator { sum: vec![0.0; ncols], seen: vec![u32::MAX; ncols], row: 0, col: Vec::new() };
+                let (mut lens, mut val) = (Vec::with_capacity(rows.len()), Vec::new());
                 for i in rows {
-                    let start = col.len();
-                    let (ca, va) = self.row(i);
-                    for (&k, &a) in ca.iter().zip(va) {
-                        let (cb, vb) = other.row(k as usize);
-                        for (&j, &b) in cb.iter().zip(vb) {
-                            if seen[j as usize] != i as u32 {
-                                seen[j as usize] = i as u32;
-                                acc[j as usize] = 0.0;
-                                col.push(j);
-                            }
-                            acc[j as usize] += a * b;
-                        }
-                    }
-                    col[start..].sort_unstable();
-                    val.extend(col[start..].iter().map(|&j| acc[j as usize]));
-                    lens.push(col.len() - start);
+                    let start = acc.col.len();
+                    acc.row = i as u32;
+                    row(i, &mut acc);
+                    acc.col[start..].sort_unstable();
+                    val.extend(acc.col[start..].iter().map(|&j| acc.sum[j as usize]));
+                    lens.push(acc.col.len() - start);
                 }
-                (lens, col, val)
+                (lens, acc.col, val)
             })
             .collect();
-        let mut out = Csr { nrows: self.nrows, ncols, row_ptr: Vec::with_capacity(self.nrows + 1), col: Vec::new(), val: Vec::new() };
+        let mut out = Csr { nrows, ncols, row_ptr: Vec::with_capacity(nrows + 1), col: Vec::new(), val: Vec::new() };
         let total: usize = chunks.iter().map(|c| c.1.len()).sum();
         out.col.reserve_exact(total);
         out.val.reserve_exact(total);
@@ -186,6 +197,80 @@ impl Csr {
             }
             out.col.extend_from_slice(&col);
             out.val.extend_from_slice(&val);
+        }
+        out
+    }
+}
+
+/// The dense accumulator of one row of [`Csr::accumulate_rows`].
+pub struct RowAccumulator {
+    sum: Vec<f64>,
+    seen: Vec<u32>,
+    row: u32,
+    col: Vec<u32>,
+}
+
+impl RowAccumulator {
+    /// Adds `v` to entry `j` of the current row.
+    #[inline]
+    pub fn add(&mut self, j: u32, v: f64) {
+        let k = j as usize;
+        if self.seen[k] != self.row {
+            self.seen[k] = self.row;
+            self.sum[k] = 0.0;
+            self.col.push(j);
+        }
+        self.sum[k] += v;
+    }
+}
+
+impl Csr {
+    /// Rows `rows` of the matrix (numbered from 0), copied.
+    pub fn row_block(&self, rows: Range<usize>) -> Csr {
+        let (a, b) = (self.row_ptr[rows.start], self.row_ptr[rows.end]);
+        Csr {
+            nrows: rows.len(),
+            ncols: self.ncols,
+            row_ptr: self.row_ptr[rows.start..=rows.end].iter().map(|&k| k - a).collect(),
+            col: self.col[a..b].to_vec(),
+            val: self.val[a..b].to_vec(),
+        }
+    }
+
+    /// The sum A + B of two matrices of the same shape (merged row by row).
+    pub fn add(&self, other: &Csr) -> Csr {
+        assert_eq!((self.nrows, self.ncols), (other.nrows, other.ncols), "shapes of a sparse sum");
+        let mut out = Csr { nrows: self.nrows, ncols: self.ncols, row_ptr: Vec::with_capacity(self.nrows + 1), col: Vec::new(), val: Vec::new() };
+        out.row_ptr.push(0);
+        for i in 0..self.nrows {
+            let (ca, va) = self.row(i);
+            let (cb, vb) = other.row(i);
+            let (mut x, mut y) = (0, 0);
+            while x < ca.len() || y < cb.len() {
+                let (c, v) = match (ca.get(x), cb.get(y)) {
+                    (Some(&p), Some(&q)) if p == q => {
+                        x += 1;
+                        y += 1;
+                        (p, va[x - 1] + vb[y - 1])
+                    }
+                    (Some(&p), Some(&q)) if p < q => {
+                        x += 1;
+                        (p, va[x - 1])
+                    }
+                    (Some(&p), None) => {
+                        x += 1;
+                        (p, va[x - 1])
+                    }
+                    (_, Some(&q)) => {
+                        y += 1;
+                        (q, vb[y - 1])
+                    }
+                    (None, None) => unreachable!("the loop runs while either row has entries"),
+                };
+                out.col.push(c);
+                out.val.push(v);
+            }
+            out.row_ptr.push(out.col.len());
         }
         out
     }
