@@ -15,7 +15,8 @@ use deformesh::highorder::{
     certify_hex, certify_quad, gmsh_hex_order, gmsh_line_order, gmsh_quad_order, hex_map, quad_map,
     vtk_hex_order, vtk_quad_order, Certificate, Spacing,
 };
-use deformesh::io::curved::{CurvedMesh, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL};
+use deformesh::io::vtu::{VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL};
+use deformesh::mesh::CurvedMesh;
 use serde_json::{json, Value};
 
 mod common;
