@@ -53,7 +53,7 @@ const ACCEPTED: &str = "Lagrange quads 3/10/36/37 with lines 1/8/26/27 (2D), \
                         hexes 5/12/92/93 with quads 3/10/36/37 (3D), points 15";
 
 /// How to turn another MSH flavour into one this reader accepts.
-const RESAVE_HINT: &str = "re-save it as MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
+const RESAVE_HINT: &str = "re-save it as ASCII MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
 
 /// Where in a file an error is: a 1-based line of text, or a byte offset
 /// in the data of a binary file (where lines mean nothing).

@@ -284,7 +284,7 @@ impl<'a> Reader<'a> {
         match file_type {
             b"0" => {}
             b"1" if size == 8 => {
-                self.data();
+                self.skip_line();
                 let (one, at) = self.take::<4>("the integer 1 in binary")?;
                 self.binary = Some(match (i32::from_le_bytes(one), i32::from_be_bytes(one)) {
                     (1, _) => false,
@@ -302,10 +302,15 @@ impl<'a> Reader<'a> {
     /// next line: moves past the header's line break.
     fn data(&mut self) -> &mut Self {
         if self.binary.is_some() {
-            let rest = &self.bytes[self.pos..];
-            self.pos += rest.iter().position(|&b| b == b'\n').map_or(rest.len(), |k| k + 1);
+            self.skip_line();
         }
         self
+    }
+
+    /// Moves past the next line break.
+    fn skip_line(&mut self) {
+        let rest = &self.bytes[self.pos..];
+        self.pos += rest.iter().position(|&b| b == b'\n').map_or(rest.len(), |k| k + 1);
     }
 
     /// Moves past whitespace, counting line breaks.
@@ -430,6 +435,7 @@ impl<'a> Reader<'a> {
 
     /// A double-quoted string on one line (it may contain spaces).
     fn quoted(&mut self, expected: &str) -> Result<String, MshError> {
+        self.skip_whitespace(); // text in binary files too
         let at = self.at();
         let rest = &self.bytes[self.pos..];
         let Some(body) = rest.strip_prefix(b"\"") else {

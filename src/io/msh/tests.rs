@@ -512,3 +512,70 @@ fn gauss_lobatto_mesh_is_written_equispaced() {
     let back = CurvedMesh::<2>::parse_msh(g.msh_string().unwrap()).unwrap();
     assert_eq!(back.nodes, g.to_equispaced().nodes);
 }
+
+// ------------------------------------------------------------ binary
+
+/// A binary MSH 4.1 file of one unit quad (nodes 1..4) with its bottom
+/// edge in the group `wall`, in either byte order.
+fn binary_square(big: bool) -> Vec<u8> {
+    let mut b: Vec<u8> = b"$MeshFormat\n4.1 1 8\n".to_vec();
+    let int = |b: &mut Vec<u8>, v: i32| b.extend(if big { v.to_be_bytes() } else { v.to_le_bytes() });
+    let size = |b: &mut Vec<u8>, v: u64| b.extend(if big { v.to_be_bytes() } else { v.to_le_bytes() });
+    let double = |b: &mut Vec<u8>, v: f64| b.extend(if big { v.to_be_bytes() } else { v.to_le_bytes() });
+    int(&mut b, 1);
+    b.extend(b"\n$EndMeshFormat\n$PhysicalNames\n1\n1 1 \"wall\"\n$EndPhysicalNames\n$Entities\n");
+    [0, 1, 1, 0].into_iter().for_each(|n| size(&mut b, n));
+    // curve 1 in group 1, no bounding points; surface 1 bounded by it
+    for (physical, bounding) in [(Some(1), None), (None, Some(1))] {
+        int(&mut b, 1);
+        [0.0, 0.0, 0.0, 1.0, 1.0, 0.0].into_iter().for_each(|x| double(&mut b, x));
+        size(&mut b, u64::from(physical.is_some()));
+        physical.into_iter().for_each(|t| int(&mut b, t));
+        size(&mut b, u64::from(bounding.is_some()));
+        bounding.into_iter().for_each(|t| int(&mut b, t));
+    }
+    b.extend(b"\n$EndEntities\n$Nodes\n");
+    [1, 4, 1, 4].into_iter().for_each(|n| size(&mut b, n));
+    [2, 1, 0].into_iter().for_each(|n| int(&mut b, n));
+    (4..=4).chain(1..=4).for_each(|n| size(&mut b, n)); // count, then the tags
+    [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0].into_iter().for_each(|x| double(&mut b, x));
+    b.extend(b"\n$EndNodes\n$Elements\n");
+    [2, 2, 1, 2].into_iter().for_each(|n| size(&mut b, n));
+    for (dim, element_type, nodes) in [(1, 1, &[1u64, 2][..]), (2, 3, &[1, 2, 3, 4][..])] {
+        [dim, 1, element_type].into_iter().for_each(|n| int(&mut b, n));
+        size(&mut b, 1);
+        size(&mut b, dim as u64);
+        nodes.iter().for_each(|&n| size(&mut b, n));
+    }
+    b.extend(b"\n$EndElements\n");
+    b
+}
+
+#[test]
+fn binary_files_of_either_byte_order_read_like_text() {
+    let text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n1 1 \"wall\"\n$EndPhysicalNames\n\
+        $Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n$EndNodes\n\
+        $Elements\n2 2 1 2\n1 1 1 1\n1 1 2\n2 1 3 1\n2 1 2 3 4\n$EndElements\n";
+    let ascii = parse_msh(text).unwrap();
+    // without $Entities no line is in `wall`: it gets its curve's name
+    assert_eq!(ascii.part_names, ["wall", "curve1"]);
+    for big in [false, true] {
+        let bytes = binary_square(big);
+        assert!(is_binary(&bytes));
+        let m = parse_msh(&bytes).unwrap();
+        assert_eq!((&m.nodes, &m.cells), (&ascii.nodes, &ascii.cells));
+        assert_eq!(m.edges, [BoundaryEdge { nodes: [0, 1], part: 0 }]);
+        assert_eq!(m.part_names, ["wall"]);
+        // every prefix fails cleanly, at a byte offset once in the data
+        for end in 0..bytes.len() - 1 {
+            let e = parse_msh(&bytes[..end]).expect_err("prefix accepted").to_string();
+            assert!(end < 40 || e.starts_with("byte ") || e.starts_with("missing"), "{e}");
+        }
+    }
+    // an element naming a node that does not exist, at its byte offset
+    let mut bytes = binary_square(false);
+    let last = bytes.len() - "\n$EndElements\n".len() - 8;
+    bytes[last] = 9;
+    let e = parse_msh(&bytes).unwrap_err().to_string();
+    assert!(e.starts_with(&format!("byte {}: element 2 refers to unknown node tag 9", last - 32)), "{e}");
+}
