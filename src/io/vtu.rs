@@ -331,6 +331,7 @@ fn push_cell_data(out: &mut String, cell_data: &[(&str, &[f64])]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::curved::tests::bend2;
     use crate::mesh::element::Spacing;
 
     fn small() -> QuadMesh {
@@ -484,10 +485,6 @@ mod tests {
     }
 
     // ------------------------------------------------------------ any order
-
-    fn bend2([x, y]: [f64; 2]) -> [f64; 2] {
-        [x + 0.1 * (2.0 * y).sin(), y + 0.15 * x * x]
-    }
 
     #[test]
     fn vtu_lists_cells_in_vtk_order() {

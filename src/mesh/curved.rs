@@ -268,15 +268,18 @@ impl CurvedMesh<3> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::highorder::{certify_hex, certify_quad, hex_map, quad_map};
 
-    fn bend2([x, y]: [f64; 2]) -> [f64; 2] {
+    /// Smooth non-affine maps of the unit square and cube, for test meshes
+    /// (also of the file tests).
+    pub(crate) fn bend2([x, y]: [f64; 2]) -> [f64; 2] {
         [x + 0.1 * (2.0 * y).sin(), y + 0.15 * x * x]
     }
 
-    fn bend3([x, y, z]: [f64; 3]) -> [f64; 3] {
+    /// See [`bend2`].
+    pub(crate) fn bend3([x, y, z]: [f64; 3]) -> [f64; 3] {
         [x + 0.1 * (2.0 * y).sin(), y + 0.1 * x * z, z - 0.1 * x * x]
     }
 

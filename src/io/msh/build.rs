@@ -51,7 +51,7 @@ impl Raw {
     /// The mesh of the first cell's order, nodes in tensor order, and its
     /// cells' element tags; every element must have that order.
     pub fn curved_mesh<const D: usize>(&self) -> Result<(CurvedMesh<D>, Vec<u64>), MshError> {
-        self.check(CURVED[D - 2])?;
+        self.check(CURVED[D.clamp(2, 3) - 2])?;
         if D == 2 {
             self.in_plane()?;
         }

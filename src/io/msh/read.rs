@@ -15,8 +15,11 @@ use super::{syntax, MshError, Pos, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES
 /// What an element type is: its dimension, order and number of nodes.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Kind {
+    /// 0 (point) to 3 (hex).
     pub dim: usize,
+    /// Lagrange order, 1 for a point.
     pub order: usize,
+    /// Nodes per element, `(order + 1)^dim`.
     pub nodes: usize,
 }
 
@@ -47,11 +50,17 @@ impl Accept {
 /// elements' tags and nodes (indices into [`Raw::nodes`], in Gmsh's local
 /// order, `kind.nodes` per element).
 pub(super) struct Block {
+    /// Tag of the entity (of the type's dimension) holding the elements.
     pub entity: i64,
+    /// MSH element type.
     pub element_type: i64,
+    /// What that type is.
     pub kind: Kind,
+    /// Where the block header is.
     pub at: Pos,
+    /// Element tags.
     pub tags: Vec<u64>,
+    /// Node indices, `kind.nodes` per element.
     pub nodes: Vec<usize>,
 }
 
@@ -66,10 +75,13 @@ pub(super) struct Raw {
     pub node_tags: Vec<u64>,
     /// Node tag → index into `nodes`.
     node_index: HashMap<u64, usize>,
+    /// Node coordinates, z included.
     pub nodes: Vec<[f64; 3]>,
     /// `(position, tag, z)` of the first node off the plane z = 0.
     pub off_plane: Option<(Pos, u64, f64)>,
+    /// Element blocks of accepted types, in file order.
     pub blocks: Vec<Block>,
+    /// Whether `$Nodes` was read (`$Elements` needs it first).
     has_nodes: bool,
     /// Where the `$Elements` header is, once read.
     pub elements_at: Option<Pos>,

@@ -1,10 +1,10 @@
 //! Tests of the MSH reader and writer, ASCII and binary, all orders.
 
 use super::*;
+use crate::io::vtu::VtuError;
+use crate::mesh::curved::tests::{bend2, bend3};
 use crate::mesh::element::Spacing;
 use crate::mesh::{BoundaryEdge, BoundaryFace};
-use crate::io::vtu::VtuError;
-
 
 /// A 5×4 box with interior and boundary nodes moved by a smooth
 /// non-affine map, and coordinates that stress round-trip printing.
@@ -452,13 +452,6 @@ fn hex_reader_errors() {
 // ------------------------------------------------------------ any order
 
 
-fn bend2([x, y]: [f64; 2]) -> [f64; 2] {
-    [x + 0.1 * (2.0 * y).sin(), y + 0.15 * x * x]
-}
-
-fn bend3([x, y, z]: [f64; 3]) -> [f64; 3] {
-    [x + 0.1 * (2.0 * y).sin(), y + 0.1 * x * z, z - 0.1 * x * x]
-}
 
 
 #[test]
