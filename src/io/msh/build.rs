@@ -18,6 +18,9 @@ use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, HexMes
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
 
+/// A boundary element in one of its parts: nodes, part, block.
+type Facet<'a> = (&'a [usize], usize, &'a Block);
+
 impl Raw {
     /// The linear quad mesh (z must be 0) and its cells' element tags.
     pub fn quad_mesh(&self) -> Result<(QuadMesh, Vec<u64>), MshError> {
@@ -110,7 +113,7 @@ impl Raw {
 
     /// Part names and the boundary elements of dimension `dim` with their
     /// part, one copy per part of their entity.
-    fn boundary(&self, dim: usize) -> (Vec<String>, Vec<(&[usize], usize, &Block)>) {
+    fn boundary(&self, dim: usize) -> (Vec<String>, Vec<Facet<'_>>) {
         let elements = self.by_tag(dim);
         let (names, parts) = self.resolve_parts(dim, elements.iter().map(|e| e.1.entity));
         let copies = elements.iter().flat_map(|&(_, b, nodes)| parts[&b.entity].iter().map(move |&part| (nodes, part, b)));

@@ -35,7 +35,7 @@ fn error_of(text: &str) -> String {
 #[test]
 fn round_trip_is_identical() {
     let m = perturbed_box();
-    let back = parse_msh(&written(&m)).unwrap();
+    let back = parse_msh(written(&m)).unwrap();
     assert_eq!(back, m);
     for (a, b) in back.nodes.iter().zip(&m.nodes) {
         assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
@@ -320,7 +320,7 @@ fn perturbed_brick() -> HexMesh {
 #[test]
 fn hex_round_trip_is_identical() {
     let m = perturbed_brick();
-    let back = parse_hex_msh(&hex_msh_string(&m)).unwrap();
+    let back = parse_hex_msh(hex_msh_string(&m)).unwrap();
     assert_eq!(back, m);
     for (a, b) in back.nodes.iter().zip(&m.nodes) {
         assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
@@ -458,10 +458,10 @@ fn hex_reader_errors() {
 fn msh_round_trip_keeps_tensor_order_and_parts() {
     for p in 1..=4 {
         let m = CurvedMesh::<2>::structured(p, Spacing::Equispaced, [2, 1], bend2).unwrap();
-        let back = CurvedMesh::<2>::parse_msh(&m.msh_string().unwrap()).unwrap();
+        let back = CurvedMesh::<2>::parse_msh(m.msh_string().unwrap()).unwrap();
         assert_eq!(back, m, "p={p}");
         let h = CurvedMesh::<3>::structured(p, Spacing::Equispaced, [1, 2, 1], bend3).unwrap();
-        let back = CurvedMesh::<3>::parse_msh(&h.msh_string().unwrap()).unwrap();
+        let back = CurvedMesh::<3>::parse_msh(h.msh_string().unwrap()).unwrap();
         assert_eq!(back, h, "p={p}");
     }
 }
@@ -483,7 +483,7 @@ fn bad_meshes_and_files_are_rejected() {
     // a hex file is not a 2D mesh; mixed orders are refused
     let h = CurvedMesh::<3>::structured(2, Spacing::Equispaced, [1, 1, 1], bend3).unwrap();
     assert!(matches!(
-        CurvedMesh::<2>::parse_msh(&h.msh_string().unwrap()),
+        CurvedMesh::<2>::parse_msh(h.msh_string().unwrap()),
         Err(MshError::UnknownElementType {
             element_type: 12,
             ..
