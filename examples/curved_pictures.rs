@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 use deformesh::highorder::{hex_map, quad_map, Spacing};
-use deformesh::io::curved::CurvedMesh;
+use deformesh::mesh::CurvedMesh;
 use deformesh::render::{
     render_curved_hex, render_curved_quads, write_png, ClipPlane, RenderOptions, RenderOptions3,
 };

@@ -10,8 +10,8 @@ use crate::deform::refine::Subdividable;
 use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
 use crate::highorder::curve::{curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
 use crate::highorder::Spacing;
-use crate::io::curved::CurvedMesh;
-use crate::io::msh::{hex_msh_string, msh_string, MshError};
+use crate::mesh::CurvedMesh;
+use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
 use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
@@ -566,32 +566,32 @@ pub struct CurveReport {
 pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     check_output_file(&job.output)?;
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
-    let text = crate::io::msh::msh_text(&bytes)?;
+    let read = crate::io::msh::parse_any(&bytes, true)?;
     let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
     // either may relax the check that curved groups lie on their shapes
     let mut job = job.clone();
     job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.shape_tolerance.unwrap_or(0.0));
     let fine_cells = |d: u32| job.options.order.max(1).pow(d);
-    let result = match crate::io::msh::cell_type_of(&text) {
-        Some((3, _)) => {
-            let (mesh, tags) = crate::io::msh::parse_hex_msh_tagged(&text)?;
+    let tags = &read.cell_tags;
+    let result = match read.mesh {
+        AnyMesh::Hexes(mesh) => {
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
             geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
-            curve_mesh(&mesh, &parts, (unbound, &shared), 0, &job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(3)))
+            curve_mesh(&mesh, &parts, (unbound, &shared), 0, &job, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3)))
         }
-        _ => {
-            let (mut mesh, tags) = crate::io::msh::parse_msh_tagged(&text)?;
+        AnyMesh::Quads(mut mesh) => {
             // Gmsh may write a surface's quads clockwise (by its normal)
             let turned = mesh.orient_counter_clockwise();
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
             geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
-            curve_mesh(&mesh, &parts, (unbound, &shared), turned, &job, &mut progress).map_err(|e| by_tag(e, &tags, fine_cells(2)))
+            curve_mesh(&mesh, &parts, (unbound, &shared), turned, &job, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2)))
         }
+        AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
-    result.map_err(|e| with_node_tag(e, &text))
+    result.map_err(|e| with_node_tag(e, &read.node_tags))
 }
 
 /// A boundary element of an entity in several physical groups is read
@@ -640,10 +640,10 @@ fn one_group_per_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(me
 }
 
 /// An off-shape node of the input named by its MSH tag.
-fn with_node_tag(e: RunError, text: &str) -> RunError {
+fn with_node_tag(e: RunError, node_tags: &[u64]) -> RunError {
     match e {
         RunError::Curve(CurveError::OffShape(mut o)) if !o.after => {
-            o.tag = crate::io::msh::node_tags(text).and_then(|t| t.get(o.node).copied());
+            o.tag = node_tags.get(o.node).copied();
             RunError::Curve(CurveError::OffShape(o))
         }
         e => e,
@@ -690,7 +690,7 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     // elements of an entity in several groups go into each of them
     for &(k, part) in shared {
         let nodes = c.mesh.boundary[k].nodes.clone();
-        c.mesh.boundary.push(crate::io::curved::CurvedBoundary { nodes, part });
+        c.mesh.boundary.push(crate::mesh::CurvedBoundary { nodes, part });
     }
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });

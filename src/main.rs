@@ -334,22 +334,26 @@ fn format_curved(q: &CurvedQuality) -> String {
 /// Quality figures of a linear or high-order quad or hex MSH file, with
 /// invalid cells named by their element tags in the file.
 fn quality_of(path: &Path) -> Result<Figures> {
-    use deformesh::io::curved::CurvedMesh;
+    use deformesh::io::msh::AnyMesh;
     let named = |e: MshError| match e {
         MshError::Io { .. } => anyhow::Error::from(e),
         other => anyhow::Error::from(other).context(path.display().to_string()),
     };
     let bytes = std::fs::read(path).map_err(|e| named(MshError::Io { path: path.to_path_buf(), source: e }))?;
-    let text = deformesh::io::msh::msh_text(&bytes).map_err(named)?;
-    match deformesh::io::msh::cell_type_of(&text) {
-        Some((2, 10 | 36 | 37)) => curved_figures(CurvedMesh::<2>::parse_msh_tagged(&text).map_err(named)?),
-        Some((3, 12 | 92 | 93)) => curved_figures(CurvedMesh::<3>::parse_msh_tagged(&text).map_err(named)?),
-        _ => Ok(Figures::Linear(linear_quality_of(&text).map_err(named)?)),
-    }
+    let read = deformesh::io::msh::parse_any(&bytes, false).map_err(named)?;
+    let tags = read.cell_tags;
+    let mut q = match read.mesh {
+        AnyMesh::Curved2(mesh) => return curved_figures((mesh, tags)),
+        AnyMesh::Curved3(mesh) => return curved_figures((mesh, tags)),
+        AnyMesh::Quads(m) => deformesh::quality::mesh_quality(&m),
+        AnyMesh::Hexes(m) => deformesh::quality::hex_mesh_quality(&m),
+    };
+    q.invalid_cells = to_tags(&q.invalid_cells, &tags);
+    Ok(Figures::Linear(q))
 }
 
 /// The figures of a curved mesh read with its element tags.
-fn curved_figures<const D: usize>((mesh, tags): (deformesh::io::curved::CurvedMesh<D>, Vec<u64>)) -> Result<Figures> {
+fn curved_figures<const D: usize>((mesh, tags): (deformesh::mesh::CurvedMesh<D>, Vec<u64>)) -> Result<Figures> {
     let mut q = certify_mesh(&mesh).map_err(anyhow::Error::from)?.1;
     q.invalid_elements = to_tags(&q.invalid_elements, &tags);
     Ok(Figures::Curved(q))
@@ -358,19 +362,4 @@ fn curved_figures<const D: usize>((mesh, tags): (deformesh::io::curved::CurvedMe
 /// Cell indices as the file's element tags.
 fn to_tags(cells: &[usize], tags: &[u64]) -> Vec<usize> {
     cells.iter().map(|&c| tags.get(c).map_or(c, |&t| t as usize)).collect()
-}
-
-/// Quality figures of a linear quad or hex MSH text (hexes when it has any).
-fn linear_quality_of(text: &str) -> Result<deformesh::quality::MeshQuality, MshError> {
-    use deformesh::io::msh::{parse_hex_msh_tagged, parse_msh_tagged};
-    let (mut q, tags) = match parse_msh_tagged(text) {
-        Ok((m, tags)) => (deformesh::quality::mesh_quality(&m), tags),
-        Err(MshError::UnknownElementType { element_type: 5, .. }) => {
-            let (m, tags) = parse_hex_msh_tagged(text)?;
-            (deformesh::quality::hex_mesh_quality(&m), tags)
-        }
-        Err(e) => return Err(e),
-    };
-    q.invalid_cells = to_tags(&q.invalid_cells, &tags);
-    Ok(q)
 }

@@ -5,7 +5,7 @@ mod common;
 
 use deformesh::driver::{curve_file, CurveJob, CurveReport, RunError};
 use deformesh::highorder::curve::CurveOptions;
-use deformesh::io::curved::CurvedMesh;
+use deformesh::mesh::CurvedMesh;
 use std::path::{Path, PathBuf};
 
 fn data(file: &str) -> PathBuf {
@@ -304,8 +304,8 @@ fn fuzzed_inputs_never_panic() {
     };
     let binary_header: Vec<u8> = String::from_utf8_lossy(&text).replacen("4.1 0 8", "4.1 1 8", 1).into_bytes();
     for round in 0..3000 {
-        // every other round claims to be binary: the binary translation
-        // then reads text as numbers, the harshest input it can get
+        // every other round claims to be binary: the reader then reads
+        // text as binary numbers, the harshest input it can get
         let mut bytes = if round % 2 == 0 { text.clone() } else { binary_header.clone() };
         for _ in 0..(1 + next() % 8) {
             if bytes.is_empty() {
@@ -324,10 +324,10 @@ fn fuzzed_inputs_never_panic() {
             }
         }
         let r = std::panic::catch_unwind(|| {
-            let s = deformesh::io::msh::msh_text(&bytes).unwrap_or_else(|_| String::from_utf8_lossy(&bytes).into_owned());
-            let _ = deformesh::io::msh::parse_msh(&s);
-            let _ = CurvedMesh::<2>::parse_msh(&s);
-            let _ = deformesh::io::msh::cell_type_of(&s);
+            let _ = deformesh::io::msh::parse_msh(&bytes);
+            let _ = deformesh::io::msh::parse_hex_msh(&bytes);
+            let _ = CurvedMesh::<2>::parse_msh(&bytes);
+            let _ = deformesh::io::msh::parse_any(&bytes, false);
         });
         assert!(r.is_ok(), "the reader panicked on a mutated file");
     }
@@ -341,7 +341,7 @@ fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
         let bin = dir.path().join(format!("bin_{file}"));
         let out = std::process::Command::new(common::python()).arg(&script).arg(data(file)).arg(&bin).output().unwrap();
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        assert!(deformesh::io::msh_binary::is_binary(&std::fs::read(&bin).unwrap()));
+        assert!(deformesh::io::msh::is_binary(&std::fs::read(&bin).unwrap()));
         if file.starts_with("cyl") {
             let (a, b) = (deformesh::io::msh::read_msh(&data(file)).unwrap(), deformesh::io::msh::read_msh(&bin).unwrap());
             assert_eq!((a.nodes.len(), a.cells.len(), a.edges.len()), (b.nodes.len(), b.cells.len(), b.edges.len()));
@@ -362,8 +362,8 @@ fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
     assert!(r.quality.invalid_elements.is_empty());
     // a binary file cut short is a clean error
     let bytes = std::fs::read(dir.path().join("bin_ball_octant_hex.msh")).unwrap();
-    let e = deformesh::io::msh::msh_text(&bytes[..bytes.len() / 2]).err().expect("truncated").to_string();
-    assert!(e.contains("truncated"), "{e}");
+    let e = deformesh::io::msh::parse_hex_msh(&bytes[..bytes.len() / 2]).err().expect("truncated").to_string();
+    assert!(e.starts_with("byte ") && e.contains("truncated"), "{e}");
 }
 
 #[test]

@@ -15,7 +15,8 @@ use deformesh::highorder::{
     certify_hex, certify_quad, gmsh_hex_order, gmsh_line_order, gmsh_quad_order, hex_map, quad_map,
     vtk_hex_order, vtk_quad_order, Certificate, Spacing,
 };
-use deformesh::io::curved::{CurvedMesh, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL};
+use deformesh::io::vtu::{VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL, VTK_QUAD};
+use deformesh::mesh::CurvedMesh;
 use serde_json::{json, Value};
 
 mod common;
@@ -415,7 +416,8 @@ fn vtk_reads_and_maps_our_lagrange_cells_like_we_do() {
             &f.report["vtk"][i],
             m,
             &f.pts2,
-            VTK_LAGRANGE_QUADRILATERAL,
+            // order 1 is the linear case, written as linear cells
+            if p == 1 { VTK_QUAD } else { VTK_LAGRANGE_QUADRILATERAL },
             &perm,
             map,
         );
@@ -430,7 +432,7 @@ fn vtk_reads_and_maps_our_lagrange_cells_like_we_do() {
             &f.report["vtk"][4 + i],
             m,
             &f.pts3,
-            VTK_LAGRANGE_HEXAHEDRON,
+            if p == 1 { VTK_HEXAHEDRON } else { VTK_LAGRANGE_HEXAHEDRON },
             &perm,
             map,
         );

@@ -11,7 +11,7 @@
 use super::{certify_hex, certify_quad, check_order, nodes_1d, Basis1d, Certificate, HighOrderError, Spacing};
 use crate::deform::refine::{refine_parts, subdivide, RefineMesh, Subdividable};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
-use crate::io::curved::{CurvedBoundary, CurvedMesh};
+use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
 use serde::Serialize;

@@ -1,19 +1,28 @@
-//! VTK XML unstructured grids (`.vtu`, ASCII), for viewing quad and hex
-//! meshes and per-cell or per-node fields in ParaView.
+//! VTK XML unstructured grids (`.vtu`, ASCII) of quad and hex meshes of
+//! any order, with per-cell and per-node fields, for ParaView. One writer
+//! ([`grid_string`]); linear meshes are its order-1 case.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
-use super::{fmt_f64, write_atomic};
-use crate::mesh::{HexMesh, QuadMesh};
+use super::fmt_f64;
+use crate::mesh::element::{to_format, vtk_hex_order, vtk_quad_order, Spacing};
+use crate::mesh::file::write_atomic;
+use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
 
 /// VTK's cell type number for a linear quadrilateral.
 pub const VTK_QUAD: u8 = 9;
 
 /// VTK's cell type number for a linear (8-node) hexahedron.
 pub const VTK_HEXAHEDRON: u8 = 12;
+
+/// VTK's cell type of a Lagrange quadrilateral.
+pub const VTK_LAGRANGE_QUADRILATERAL: u8 = 70;
+
+/// VTK's cell type of a Lagrange hexahedron.
+pub const VTK_LAGRANGE_HEXAHEDRON: u8 = 72;
 
 /// Errors of writing VTU files.
 #[derive(Debug, Error)]
@@ -53,26 +62,14 @@ pub enum VtuError {
     Invalid(String),
 }
 
-/// The mesh as a VTK XML UnstructuredGrid (version 1.0, ASCII): Float64
-/// points with z = 0, Int64 connectivity and offsets, UInt8 cell types
-/// ([`VTK_QUAD`]), one Float64 scalar CellData array per `cell_data` entry
-/// and one 3-component Float64 PointData array (z = 0) per `point_vectors`
-/// entry. Values are printed with round-trip precision.
-///
-/// Fails without writing anything on NaN or infinite values, on arrays of
-/// the wrong length, on dangling node indices and on empty or repeated
-/// array names.
+/// The quad mesh as a VTK XML UnstructuredGrid ([`grid_string`] of the
+/// order-1 mesh): cells of type [`VTK_QUAD`], 2-vectors written with z = 0.
 pub fn vtu_string(
     mesh: &QuadMesh,
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 2]])],
 ) -> Result<String, VtuError> {
-    let grid = Grid {
-        points: &mesh.nodes,
-        cells: &mesh.cells,
-        cell_type: VTK_QUAD,
-    };
-    grid.to_vtu(cell_data, point_vectors)
+    grid_string(&CurvedMesh::from_quads(mesh), cell_data, point_vectors)
 }
 
 /// Writes [`vtu_string`] atomically to `path`.
@@ -85,21 +82,15 @@ pub fn write_vtu(
     write_text(path, &vtu_string(mesh, cell_data, point_vectors)?)
 }
 
-/// The hex mesh as a VTK XML UnstructuredGrid (version 1.0, ASCII), laid
-/// out as in [`vtu_string`] but with 3D points, cells of type
-/// [`VTK_HEXAHEDRON`] (whose node order is [`HexMesh`]'s) and 3-component
-/// point vectors written as given. Rejects the same inputs.
+/// The hex mesh as a VTK XML UnstructuredGrid ([`grid_string`] of the
+/// order-1 mesh): cells of type [`VTK_HEXAHEDRON`], whose node order is
+/// [`HexMesh`]'s.
 pub fn hex_vtu_string(
     mesh: &HexMesh,
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 3]])],
 ) -> Result<String, VtuError> {
-    let grid = Grid {
-        points: &mesh.nodes,
-        cells: &mesh.cells,
-        cell_type: VTK_HEXAHEDRON,
-    };
-    grid.to_vtu(cell_data, point_vectors)
+    grid_string(&CurvedMesh::from_hexes(mesh), cell_data, point_vectors)
 }
 
 /// Writes [`hex_vtu_string`] atomically to `path`; nothing is written if
@@ -113,6 +104,19 @@ pub fn write_hex_vtu(
     write_text(path, &hex_vtu_string(mesh, cell_data, point_vectors)?)
 }
 
+impl<const D: usize> CurvedMesh<D> {
+    /// [`grid_string`] without point data.
+    pub fn vtu_string(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
+        grid_string(self, cell_data, &[])
+    }
+
+    /// Writes [`CurvedMesh::vtu_string`] atomically to `path`; nothing is
+    /// written if the input is rejected.
+    pub fn write_vtu(&self, path: &Path, cell_data: &[(&str, &[f64])]) -> Result<(), VtuError> {
+        write_text(path, &self.vtu_string(cell_data)?)
+    }
+}
+
 /// Writes `text` atomically, naming `path` in the error.
 fn write_text(path: &Path, text: &str) -> Result<(), VtuError> {
     write_atomic(path, text.as_bytes()).map_err(|source| VtuError::Io {
@@ -121,109 +125,99 @@ fn write_text(path: &Path, text: &str) -> Result<(), VtuError> {
     })
 }
 
-/// An unstructured grid of one cell type: points with `D` coordinates
-/// (z = 0 when `D` = 2) and cells of `V` nodes. Quad and hex meshes share
-/// all the writing code through it.
-struct Grid<'a, const D: usize, const V: usize> {
-    points: &'a [[f64; D]],
-    cells: &'a [[usize; V]],
-    /// VTK cell type of every cell.
-    cell_type: u8,
+/// The cells of a mesh of any order as a VTK XML UnstructuredGrid (ASCII):
+/// Float64 points (z = 0 in 2D), Int64 connectivity and offsets, UInt8
+/// types ([`VTK_QUAD`] and [`VTK_HEXAHEDRON`] at order 1, else
+/// [`VTK_LAGRANGE_QUADRILATERAL`] and [`VTK_LAGRANGE_HEXAHEDRON`] in VTK 9's
+/// node order, whose order VTK infers from the number of points), one
+/// Float64 CellData array per `cell_data` entry and one 3-component
+/// PointData array per `point_vectors` entry. Nodes are resampled to
+/// equispaced ones first; boundary elements are not written. Values are
+/// printed with round-trip precision.
+///
+/// Fails without writing anything on NaN or infinite values, arrays of the
+/// wrong length, empty or repeated array names, and meshes that fail
+/// [`CurvedMesh::validate`].
+pub fn grid_string<const D: usize>(
+    mesh: &CurvedMesh<D>,
+    cell_data: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; D]])],
+) -> Result<String, VtuError> {
+    validate(mesh, cell_data, point_vectors)?;
+    let resampled;
+    let mesh = if mesh.spacing == Spacing::Equispaced {
+        mesh
+    } else {
+        resampled = mesh.to_equispaced();
+        &resampled
+    };
+    let mut out = String::from("<?xml version=\"1.0\"?>\n");
+    // Version 2.2 is how a file says "VTK 9 hex edge order": VTK's XML
+    // reader renumbers the edges of Lagrange hexes in older files (it
+    // swaps the vertical edges 10 and 11, VTK 8's order), which would
+    // silently scramble ours.
+    out.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"2.2\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n");
+    put!(out, "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", mesh.nodes.len(), mesh.cells.len());
+    push_point_data(&mut out, point_vectors);
+    push_cell_data(&mut out, cell_data);
+    put!(out, "<Points>\n{}", float_array_tag(None, 3));
+    for x in &mesh.nodes {
+        push_vec3(&mut out, x);
+    }
+    out.push_str("</DataArray>\n</Points>\n");
+    push_cells(&mut out, mesh);
+    out.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    Ok(out)
 }
 
-impl<const D: usize, const V: usize> Grid<'_, D, V> {
-    /// The whole file, after [`Grid::validate`].
-    fn to_vtu(
-        &self,
-        cell_data: &[(&str, &[f64])],
-        point_vectors: &[(&str, &[[f64; D]])],
-    ) -> Result<String, VtuError> {
-        self.validate(cell_data, point_vectors)?;
-        let mut out = String::new();
-        out.push_str("<?xml version=\"1.0\"?>\n");
-        out.push_str(
-            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n",
-        );
-        out.push_str("<UnstructuredGrid>\n");
-        put!(
-            out,
-            "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-            self.points.len(),
-            self.cells.len()
-        );
-        push_point_data(&mut out, point_vectors);
-        push_cell_data(&mut out, cell_data);
-        self.push_points(&mut out);
-        self.push_cells(&mut out);
-        out.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-        Ok(out)
+/// Everything [`grid_string`] promises to reject.
+fn validate<const D: usize>(
+    mesh: &CurvedMesh<D>,
+    cell_data: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; D]])],
+) -> Result<(), VtuError> {
+    check_finite("point coordinates", mesh.nodes.iter().flatten().copied(), D)?;
+    mesh.validate().map_err(VtuError::Invalid)?;
+    check_names(cell_data.iter().map(|a| a.0))?;
+    check_names(point_vectors.iter().map(|a| a.0))?;
+    for (name, values) in cell_data {
+        let what = format!("cell array {name:?}");
+        check_length(&what, mesh.cells.len(), values.len())?;
+        check_finite(&what, values.iter().copied(), 1)?;
     }
+    for (name, values) in point_vectors {
+        let what = format!("point array {name:?}");
+        check_length(&what, mesh.nodes.len(), values.len())?;
+        check_finite(&what, values.iter().flatten().copied(), D)?;
+    }
+    Ok(())
+}
 
-    /// Everything [`vtu_string`] promises to reject.
-    fn validate(
-        &self,
-        cell_data: &[(&str, &[f64])],
-        point_vectors: &[(&str, &[[f64; D]])],
-    ) -> Result<(), VtuError> {
-        check_finite(
-            "point coordinates",
-            self.points.iter().flatten().copied(),
-            D,
-        )?;
-        let n = self.points.len();
-        if let Some(c) = self.cells.iter().position(|c| c.iter().any(|&v| v >= n)) {
-            return Err(VtuError::Invalid(format!(
-                "cell {c} refers to a node >= {n}"
-            )));
+/// Connectivity in VTK's node order, offsets (end of each cell), types.
+fn push_cells<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>) {
+    let (p, ok) = (mesh.p, "order checked by validate");
+    let (perm, cell_type) = match (D, p) {
+        (2, 1) => (vtk_quad_order(1).expect(ok), VTK_QUAD),
+        (2, _) => (vtk_quad_order(p).expect(ok), VTK_LAGRANGE_QUADRILATERAL),
+        (_, 1) => (vtk_hex_order(1).expect(ok), VTK_HEXAHEDRON),
+        _ => (vtk_hex_order(p).expect(ok), VTK_LAGRANGE_HEXAHEDRON),
+    };
+    out.push_str("<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+    for cell in &mesh.cells {
+        for (i, v) in to_format(&perm, cell).iter().enumerate() {
+            let _ = write!(out, "{}{v}", if i == 0 { "" } else { " " });
         }
-        check_names(cell_data.iter().map(|a| a.0))?;
-        check_names(point_vectors.iter().map(|a| a.0))?;
-        for (name, values) in cell_data {
-            let what = format!("cell array {name:?}");
-            check_length(&what, self.cells.len(), values.len())?;
-            check_finite(&what, values.iter().copied(), 1)?;
-        }
-        for (name, values) in point_vectors {
-            let what = format!("point array {name:?}");
-            check_length(&what, n, values.len())?;
-            check_finite(&what, values.iter().flatten().copied(), D)?;
-        }
-        Ok(())
+        out.push('\n');
     }
-
-    /// Points, z = 0 in 2D.
-    fn push_points(&self, out: &mut String) {
-        put!(out, "<Points>\n{}", float_array_tag(None, 3));
-        for p in self.points {
-            push_vec3(out, p);
-        }
-        out.push_str("</DataArray>\n</Points>\n");
+    out.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+    for c in 1..=mesh.cells.len() {
+        put!(out, "{}", c * perm.len());
     }
-
-    /// Connectivity, offsets (end of each cell) and types.
-    fn push_cells(&self, out: &mut String) {
-        out.push_str(
-            "<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n",
-        );
-        for c in self.cells {
-            let _ = write!(out, "{}", c[0]);
-            for v in &c[1..] {
-                let _ = write!(out, " {v}");
-            }
-            out.push('\n');
-        }
-        out.push_str(
-            "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n",
-        );
-        for c in 1..=self.cells.len() {
-            put!(out, "{}", V * c);
-        }
-        out.push_str("</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-        for _ in self.cells {
-            put!(out, "{}", self.cell_type);
-        }
-        out.push_str("</DataArray>\n</Cells>\n");
+    out.push_str("</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    for _ in &mesh.cells {
+        put!(out, "{cell_type}");
     }
+    out.push_str("</DataArray>\n</Cells>\n");
 }
 
 /// One line `x y z` of a 2- or 3-vector; missing components are written
@@ -337,6 +331,8 @@ fn push_cell_data(out: &mut String, cell_data: &[(&str, &[f64])]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::curved::tests::bend2;
+    use crate::mesh::element::Spacing;
 
     fn small() -> QuadMesh {
         QuadMesh::structured_box([0.0, 0.0], [1.0, 0.5], 2, 1)
@@ -348,7 +344,7 @@ mod tests {
         let q = [0.25, -1e-300];
         let d = vec![[0.1, 0.2]; 6];
         let text = vtu_string(&m, &[("quality", &q)], &[("d<x>", &d)]).unwrap();
-        assert!(text.contains("version=\"1.0\""));
+        assert!(text.contains("version=\"2.2\""));
         assert!(text.contains("<Piece NumberOfPoints=\"6\" NumberOfCells=\"2\">"));
         assert!(text.contains(
             "Name=\"quality\" NumberOfComponents=\"1\" format=\"ascii\">\n0.25\n-1e-300\n"
@@ -486,5 +482,19 @@ mod tests {
             std::fs::read_to_string(&path).unwrap(),
             hex_vtu_string(&m, &[], &[]).unwrap()
         );
+    }
+
+    // ------------------------------------------------------------ any order
+
+    #[test]
+    fn vtu_lists_cells_in_vtk_order() {
+        let m = CurvedMesh::<2>::structured(2, Spacing::Equispaced, [1, 1], bend2).unwrap();
+        let text = m.vtu_string(&[("quality", &[0.5])]).unwrap();
+        // tensor 0..9 on the 3×3 grid: VTK wants corners 0 2 8 6, edges
+        // (y=0) 1, (x=1) 5, (y=1) 7, (x=0) 3, centre 4
+        assert!(text.contains("\n0 2 8 6 1 5 7 3 4\n"), "{text}");
+        assert!(text.contains("<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n70\n"));
+        // VTK reads files older than 2.2 with VTK 8's hex edge order
+        assert!(text.contains("version=\"2.2\""));
     }
 }

@@ -22,7 +22,7 @@ use std::collections::HashMap;
 use tiny_skia::{FillRule, LineCap, LineJoin, Mask, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 use super::check_values;
-use crate::highorder::order::HEX_CORNERS;
+use crate::mesh::element::order::HEX_CORNERS;
 use super::colour::ColourMap;
 use super::hex::raster::{self, distance_to_segment, edge_blend, Canvas, EdgeStyle};
 use super::hex::surface::{surface_faces, HEX_FACES};
@@ -36,8 +36,8 @@ use super::{
     canvas, decorate, draw, ink, legend, resolve_range, Legend, Plan, RenderError, RenderOptions,
     RenderOptions3,
 };
-use crate::highorder::{check_order, Basis1d, Spacing, MAX_ORDER};
-use crate::io::curved::CurvedMesh;
+use crate::mesh::element::{check_order, Basis1d, Spacing, MAX_ORDER};
+use crate::mesh::CurvedMesh;
 
 /// Straight pieces per element edge and per unit of order: 8 per order
 /// keeps the polygon within a small fraction of a pixel of the true curve

@@ -92,5 +92,5 @@ fn straight_rgba(p: &Pixmap) -> Vec<u8> {
 
 /// The project's atomic write (temporary sibling, then rename).
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
-    Ok(crate::io::write_atomic(path, bytes)?)
+    Ok(crate::mesh::file::write_atomic(path, bytes)?)
 }

@@ -11,7 +11,7 @@
 //! surface seen by a [`Camera`], optionally cut open by a [`ClipPlane`],
 //! with the same colour bar and title.
 //!
-//! Curved high-order meshes ([`CurvedMesh`](crate::io::curved::CurvedMesh))
+//! Curved high-order meshes ([`CurvedMesh`](crate::mesh::CurvedMesh))
 //! are drawn by [`render_curved_quads`] and [`render_curved_hex`], which
 //! follow the true Lagrange edges and faces of each element.
 

@@ -1,0 +1,158 @@
+//! Meshes made of what the reader found: linear quad and hex meshes and
+//! meshes of any order, from one [`Raw`]. Cells are the elements of the
+//! mesh dimension, boundary elements those one below, both ordered by
+//! element tag; points, and lines of a 3D mesh, carry nothing kept.
+//!
+//! Boundary parts are the named physical groups of the boundary dimension
+//! in order of physical tag, then `curve<tag>` / `surface<tag>` for
+//! entities in none of them; an entity in several groups puts its elements
+//! in each.
+
+use std::collections::HashMap;
+
+use super::read::{Accept, Block, Raw};
+use super::{syntax, MshError, CURVED, LINEAR};
+use crate::mesh::element::{from_format, gmsh_hex_order, gmsh_line_order, gmsh_quad_order, Spacing};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, HexMesh, QuadMesh};
+
+/// An element: its tag, its block and its nodes (Gmsh's local order).
+type Element<'a> = (u64, &'a Block, &'a [usize]);
+
+/// A boundary element in one of its parts: nodes, part, block.
+type Facet<'a> = (&'a [usize], usize, &'a Block);
+
+impl Raw {
+    /// The linear quad mesh (z must be 0) and its cells' element tags.
+    pub fn quad_mesh(&self) -> Result<(QuadMesh, Vec<u64>), MshError> {
+        self.check(LINEAR[0])?;
+        self.in_plane()?;
+        let cells = self.by_tag(2);
+        let (part_names, edges) = self.boundary(1);
+        let mesh = QuadMesh {
+            nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
+            cells: cells.iter().map(|c| c.2.try_into().expect("4-node quads")).collect(),
+            edges: edges.iter().map(|&(nodes, part, _)| BoundaryEdge { nodes: nodes.try_into().expect("2-node lines"), part }).collect(),
+            part_names,
+        };
+        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+    }
+
+    /// The linear hex mesh and its cells' element tags.
+    pub fn hex_mesh(&self) -> Result<(HexMesh, Vec<u64>), MshError> {
+        self.check(LINEAR[1])?;
+        let cells = self.by_tag(3);
+        let (part_names, faces) = self.boundary(2);
+        let mesh = HexMesh {
+            nodes: self.nodes.clone(),
+            cells: cells.iter().map(|c| c.2.try_into().expect("8-node hexes")).collect(),
+            faces: faces.iter().map(|&(nodes, part, _)| BoundaryFace { nodes: nodes.try_into().expect("4-node quads"), part }).collect(),
+            part_names,
+        };
+        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+    }
+
+    /// The mesh of the first cell's order, nodes in tensor order, and its
+    /// cells' element tags; every element must have that order.
+    pub fn curved_mesh<const D: usize>(&self) -> Result<(CurvedMesh<D>, Vec<u64>), MshError> {
+        self.check(CURVED[D.clamp(2, 3) - 2])?;
+        if D == 2 {
+            self.in_plane()?;
+        }
+        let cells = self.by_tag(D);
+        let Some(&(_, first, _)) = cells.first() else {
+            let at = self.elements_at.expect("read");
+            return Err(syntax(at, &format!("at least one {D}D cell"), "none"));
+        };
+        let p = first.kind.order;
+        let ok = "orders 1..=4 from the type table";
+        let (cell_perm, face_perm) = match D {
+            2 => (gmsh_quad_order(p).expect(ok), gmsh_line_order(p).expect(ok)),
+            _ => (gmsh_hex_order(p).expect(ok), gmsh_quad_order(p).expect(ok)),
+        };
+        let (part_names, faces) = self.boundary(D - 1);
+        let blocks = cells.iter().map(|c| c.1).chain(faces.iter().map(|f| f.2));
+        if let Some(b) = blocks.into_iter().find(|b| b.kind.order != p) {
+            return Err(syntax(b.at, &format!("an element of order {p}, as the first cell"), &format!("order {}", b.kind.order)));
+        }
+        let mesh = CurvedMesh {
+            p,
+            spacing: Spacing::Equispaced,
+            nodes: self.nodes.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
+            cells: cells.iter().map(|c| from_format(&cell_perm, c.2)).collect(),
+            boundary: faces.iter().map(|&(nodes, part, _)| CurvedBoundary { nodes: from_format(&face_perm, nodes), part }).collect(),
+            part_names,
+        };
+        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+    }
+
+    /// Fails on a block of a type `accept` leaves out: a file read for
+    /// any kind of mesh, then made into one kind.
+    fn check(&self, accept: Accept) -> Result<(), MshError> {
+        match self.blocks.iter().find(|b| accept.kind(b.element_type).is_none()) {
+            Some(b) => Err(MshError::UnknownElementType { at: b.at, accepted: accept.phrase, element_type: b.element_type }),
+            None => Ok(()),
+        }
+    }
+
+    /// A 2D mesh keeps x and y only: a node off z = 0 would move.
+    fn in_plane(&self) -> Result<(), MshError> {
+        match self.off_plane {
+            Some((at, tag, z)) => Err(MshError::OffPlane { at, tag, z }),
+            None => Ok(()),
+        }
+    }
+
+    /// The elements of dimension `dim`, by tag (file order among equal
+    /// tags).
+    fn by_tag(&self, dim: usize) -> Vec<Element<'_>> {
+        let blocks = self.blocks.iter().filter(|b| b.kind.dim == dim);
+        let mut all: Vec<Element> = blocks.flat_map(|b| b.tags.iter().zip(b.nodes.chunks(b.kind.nodes)).map(move |(&t, n)| (t, b, n))).collect();
+        all.sort_by_key(|e| e.0);
+        all
+    }
+
+    /// Part names and the boundary elements of dimension `dim` with their
+    /// part, one copy per part of their entity.
+    fn boundary(&self, dim: usize) -> (Vec<String>, Vec<Facet<'_>>) {
+        let elements = self.by_tag(dim);
+        let (names, parts) = self.resolve_parts(dim, elements.iter().map(|e| e.1.entity));
+        let copies = elements.iter().flat_map(|&(_, b, nodes)| parts[&b.entity].iter().map(move |&part| (nodes, part, b)));
+        (names, copies.collect())
+    }
+
+    /// Part names and the parts of every entity in `entities` (of the
+    /// boundary dimension `dim`); see the module docs.
+    fn resolve_parts(&self, dim: usize, entities: impl Iterator<Item = i64>) -> (Vec<String>, HashMap<i64, Vec<usize>>) {
+        let mut named: Vec<&(i64, i64, String)> = self.physical_names.iter().filter(|p| p.0 == dim as i64).collect();
+        named.sort_by_key(|p| p.1);
+        let mut names: Vec<String> = Vec::new();
+        let mut tag_part: HashMap<i64, usize> = HashMap::new();
+        for (_, tag, name) in named {
+            let part = names.iter().position(|n| n == name).unwrap_or_else(|| {
+                names.push(name.clone());
+                names.len() - 1
+            });
+            tag_part.insert(*tag, part);
+        }
+        let prefix = if dim == 1 { "curve" } else { "surface" };
+        let mut entity_parts = HashMap::new();
+        for entity in entities {
+            if entity_parts.contains_key(&entity) {
+                continue;
+            }
+            let physicals = self.entity_physicals.get(&(dim, entity)).map(Vec::as_slice).unwrap_or(&[]);
+            let mut parts: Vec<usize> = Vec::new();
+            for &p in physicals.iter().filter_map(|t| tag_part.get(t)) {
+                if !parts.contains(&p) {
+                    parts.push(p);
+                }
+            }
+            if parts.is_empty() {
+                names.push(format!("{prefix}{entity}"));
+                parts.push(names.len() - 1);
+            }
+            entity_parts.insert(entity, parts);
+        }
+        (names, entity_parts)
+    }
+}

@@ -1,0 +1,328 @@
+//! Gmsh MSH 4.1 files of quad and hex meshes of any order: one reader for
+//! ASCII and binary files ([`read`]), meshes made of what it read
+//! ([`build`]), and one writer ([`write`]).
+//!
+//! Layout written: every boundary part becomes an entity of the boundary
+//! dimension (a curve in 2D, a surface in 3D) carrying a physical group of
+//! that dimension with the part's name; all nodes and cells live on one
+//! entity of the mesh dimension carrying the physical group
+//! [`DOMAIN_NAME`]. Element tags run from 1: boundary element `i` gets tag
+//! `i + 1`, cell `c` gets tag `boundary.len() + c + 1`. Because the reader
+//! orders elements by tag, the boundary order survives even though it is
+//! grouped by part in the file. Elements of order `p` keep their nodes in
+//! tensor order inside the crate ([`crate::mesh::element`]) and in Gmsh's
+//! order in the file.
+
+mod build;
+mod read;
+mod write;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+pub use write::{hex_msh_string, msh_string, write_hex_msh, write_msh};
+
+use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
+use read::Accept;
+
+/// Name of the physical group that holds all cells (dimension 2 for quad
+/// meshes, 3 for hex meshes).
+pub const DOMAIN_NAME: &str = "domain";
+
+/// MSH element types of lines of order 1..=4 (index `p − 1`).
+pub const MSH_LINE_TYPES: [i64; 4] = [1, 8, 26, 27];
+/// MSH element types of quads of order 1..=4: QUA_4, QUA_9, QUA_16, QUA_25.
+pub const MSH_QUAD_TYPES: [i64; 4] = [3, 10, 36, 37];
+/// MSH element types of hexes of order 1..=4: HEX_8, HEX_27, HEX_64, HEX_125.
+pub const MSH_HEX_TYPES: [i64; 4] = [5, 12, 92, 93];
+
+/// What the linear readers take: quad meshes, then hex meshes.
+const LINEAR: [Accept; 2] = [
+    Accept { max_dim: 2, max_order: 1, phrase: "only linear meshes: 1 = 2-node line, 3 = 4-node quad, 15 = point" },
+    Accept { max_dim: 3, max_order: 1, phrase: "only linear meshes: 1 = 2-node line, 3 = 4-node quad, 5 = 8-node hexahedron, 15 = point" },
+];
+
+/// What the readers of any order take, in 2D and in 3D.
+const CURVED: [Accept; 2] = [
+    Accept { max_dim: 2, max_order: 4, phrase: ACCEPTED },
+    Accept { max_dim: 3, max_order: 4, phrase: ACCEPTED },
+];
+const ACCEPTED: &str = "Lagrange quads 3/10/36/37 with lines 1/8/26/27 (2D), \
+                        hexes 5/12/92/93 with quads 3/10/36/37 (3D), points 15";
+
+/// How to turn another MSH flavour into one this reader accepts.
+const RESAVE_HINT: &str = "re-save it as ASCII MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
+
+/// Where in a file an error is: a 1-based line of text, or a byte offset
+/// in the data of a binary file (where lines mean nothing).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pos {
+    /// A line of an ASCII file (or of a binary file's text).
+    Line(usize),
+    /// A byte offset from the start of a binary file.
+    Byte(usize),
+}
+
+impl fmt::Display for Pos {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match self {
+            Pos::Line(n) => write!(f, "line {n}"),
+            Pos::Byte(n) => write!(f, "byte {n}"),
+        }
+    }
+}
+
+/// Errors of reading or writing MSH files. Parse errors carry where the
+/// offending item starts.
+#[derive(Debug, Error)]
+pub enum MshError {
+    /// The file could not be read or written.
+    #[error("cannot read or write `{}`", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file ended while more data was expected.
+    #[error("{at}: file truncated: expected {expected}")]
+    Truncated {
+        /// The end of the file.
+        at: Pos,
+        /// What was expected next.
+        expected: String,
+    },
+    /// An item did not have the expected form.
+    #[error("{at}: expected {expected}, found {}", shown(found, "`"))]
+    Syntax {
+        /// Where the item is.
+        at: Pos,
+        /// What was expected.
+        expected: String,
+        /// The item found.
+        found: String,
+    },
+    /// A version other than 4.1 (e.g. MSH 2.2).
+    #[error("{at}: MSH version {} is not supported: {RESAVE_HINT}", shown(version, ""))]
+    UnsupportedVersion {
+        /// Where the version number is.
+        at: Pos,
+        /// The version found.
+        version: String,
+    },
+    /// A section header announced another number of items than it holds.
+    #[error("{at}: {what}: the header says {expected}, the blocks hold {found}")]
+    CountMismatch {
+        /// Where the section header is.
+        at: Pos,
+        /// What was counted.
+        what: &'static str,
+        /// Count from the header.
+        expected: u64,
+        /// Count found.
+        found: u64,
+    },
+    /// An element type the reader cannot store (e.g. a triangle, or a hex
+    /// in a quad mesh).
+    #[error("{at}: unsupported element type {element_type} ({accepted}){}", recombine_hint(*element_type))]
+    UnknownElementType {
+        /// Where the element block header is.
+        at: Pos,
+        /// The element types this reader accepts, as a phrase.
+        accepted: &'static str,
+        /// The MSH element type number.
+        element_type: i64,
+    },
+    /// A NaN or infinite node coordinate.
+    #[error("{at}: node {tag} has a non-finite coordinate `{value}`")]
+    NonFinite {
+        /// Where the coordinate is.
+        at: Pos,
+        /// Node tag.
+        tag: u64,
+        /// The coordinate as written.
+        value: String,
+    },
+    /// An element refers to a node tag that no node block defined.
+    #[error("{at}: element {element} refers to unknown node tag {tag}")]
+    UnknownNode {
+        /// Where the element is.
+        at: Pos,
+        /// Element tag.
+        element: u64,
+        /// The undefined node tag.
+        tag: u64,
+    },
+    /// The same node tag defined twice.
+    #[error("{at}: node tag {tag} is defined twice")]
+    DuplicateNode {
+        /// Where the second definition is.
+        at: Pos,
+        /// The node tag.
+        tag: u64,
+    },
+    /// A node of a 2D mesh off the plane z = 0: dropping z would move it.
+    #[error("{at}: node {tag} has z = {z}, but a quad (2D) mesh must lie in the plane z = 0 (move or project the mesh there)")]
+    OffPlane {
+        /// Where its coordinates are.
+        at: Pos,
+        /// Node tag.
+        tag: u64,
+        /// Its z.
+        z: f64,
+    },
+    /// A required section is absent.
+    #[error("missing section ${0}")]
+    MissingSection(&'static str),
+    /// The mesh to write is inconsistent.
+    #[error("cannot write mesh: {0}")]
+    InvalidMesh(String),
+}
+
+/// A syntax error at `at`.
+fn syntax(at: Pos, expected: &str, found: &str) -> MshError {
+    MshError::Syntax { at, expected: expected.to_string(), found: found.to_string() }
+}
+
+/// A token of the file for a message: quoted, cut to 40 characters, and
+/// never raw bytes: a binary or garbage file would otherwise write control
+/// characters to the user's terminal.
+fn shown(token: &str, quote: &str) -> String {
+    if token.chars().any(|c| c.is_control() || c == char::REPLACEMENT_CHARACTER) {
+        return "bytes that are not text (is this an MSH file?)".into();
+    }
+    match token.char_indices().nth(40) {
+        Some((cut, _)) => format!("{quote}{}…{quote}", &token[..cut]),
+        None => format!("{quote}{token}{quote}"),
+    }
+}
+
+/// For triangles, tetrahedra, prisms and pyramids: what to do instead.
+/// Gmsh makes them by default, so this is the usual first failure.
+fn recombine_hint(element_type: i64) -> &'static str {
+    match element_type {
+        2 | 9 | 20..=25 | 4 | 11 | 29..=33 | 6 | 13 | 18 | 7 | 14 | 19 => {
+            ". Triangles, tetrahedra, prisms and pyramids are not supported yet: deformesh takes quad and hex meshes. \
+             In Gmsh, recombine: for all quads put `Mesh.RecombineAll = 1;` and `Mesh.SubdivisionAlgorithm = 1;` in the .geo file \
+             (or pass `-setnumber Mesh.RecombineAll 1 -setnumber Mesh.SubdivisionAlgorithm 1`), \
+             for all hexes `Mesh.SubdivisionAlgorithm = 2;` (or extrude a quad mesh with `Recombine`); see the README"
+        }
+        _ => "",
+    }
+}
+
+/// True when `bytes` start like a binary MSH 4.1 file.
+pub fn is_binary(bytes: &[u8]) -> bool {
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(64)]);
+    head.split_whitespace().take(3).eq(["$MeshFormat", "4.1", "1"])
+}
+
+/// The bytes of the file at `path`.
+fn read_file(path: &Path) -> Result<Vec<u8>, MshError> {
+    std::fs::read(path).map_err(|source| MshError::Io { path: path.to_owned(), source })
+}
+
+/// Reads an MSH 4.1 file, ASCII or binary (see [`parse_msh`]).
+pub fn read_msh(path: &Path) -> Result<QuadMesh, MshError> {
+    parse_msh(read_file(path)?)
+}
+
+/// Parses an MSH 4.1 file (ASCII text or binary bytes) of 2-node lines
+/// (boundary edges), 4-node quads (cells) and points (skipped) into a
+/// quad mesh; z must be 0 and is dropped. Nodes keep file order and are
+/// renumbered from 0; cells and edges are ordered by element tag and keep
+/// the file's node order. Sections other than `$MeshFormat`,
+/// `$PhysicalNames`, `$Entities`, `$Nodes` and `$Elements` are skipped.
+pub fn parse_msh(bytes: impl AsRef<[u8]>) -> Result<QuadMesh, MshError> {
+    Ok(parse_msh_tagged(bytes)?.0)
+}
+
+/// [`parse_msh`], with the element tag of every cell in the file (cell
+/// `c` is element `tags[c]`): messages name elements as the file does.
+pub fn parse_msh_tagged(bytes: impl AsRef<[u8]>) -> Result<(QuadMesh, Vec<u64>), MshError> {
+    read::parse(bytes.as_ref(), LINEAR[0])?.quad_mesh()
+}
+
+/// Reads an MSH 4.1 hex mesh file, ASCII or binary (see [`parse_hex_msh`]).
+pub fn read_hex_msh(path: &Path) -> Result<HexMesh, MshError> {
+    parse_hex_msh(read_file(path)?)
+}
+
+/// Parses an MSH 4.1 file into a hex mesh: 8-node hexes (cells), 4-node
+/// quads (boundary faces); lines and points are skipped. Otherwise as
+/// [`parse_msh`].
+pub fn parse_hex_msh(bytes: impl AsRef<[u8]>) -> Result<HexMesh, MshError> {
+    Ok(parse_hex_msh_tagged(bytes)?.0)
+}
+
+/// [`parse_hex_msh`], with the element tag of every cell in the file.
+pub fn parse_hex_msh_tagged(bytes: impl AsRef<[u8]>) -> Result<(HexMesh, Vec<u64>), MshError> {
+    read::parse(bytes.as_ref(), LINEAR[1])?.hex_mesh()
+}
+
+impl<const D: usize> CurvedMesh<D> {
+    /// Reads an MSH 4.1 file, ASCII or binary (see [`CurvedMesh::parse_msh`]).
+    pub fn read_msh(path: &Path) -> Result<CurvedMesh<D>, MshError> {
+        Self::parse_msh(read_file(path)?)
+    }
+
+    /// Parses an MSH 4.1 file of Lagrange quads (`D = 2`: types 3, 10, 36,
+    /// 37, boundary lines 1, 8, 26, 27) or hexes (`D = 3`: types 5, 12, 92,
+    /// 93, boundary quads 3, 10, 36, 37) of one order into a mesh with
+    /// [`crate::mesh::element::Spacing::Equispaced`] nodes in tensor order.
+    /// Otherwise as [`parse_msh`] and [`parse_hex_msh`].
+    pub fn parse_msh(bytes: impl AsRef<[u8]>) -> Result<CurvedMesh<D>, MshError> {
+        Ok(Self::parse_msh_tagged(bytes)?.0)
+    }
+
+    /// [`CurvedMesh::parse_msh`], with the element tag of every cell.
+    pub fn parse_msh_tagged(bytes: impl AsRef<[u8]>) -> Result<(CurvedMesh<D>, Vec<u64>), MshError> {
+        read::parse(bytes.as_ref(), CURVED[D.clamp(2, 3) - 2])?.curved_mesh()
+    }
+}
+
+/// A mesh of whichever kind an MSH file holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnyMesh {
+    /// Linear quads.
+    Quads(QuadMesh),
+    /// Linear hexes.
+    Hexes(HexMesh),
+    /// Quads of order 2..=4.
+    Curved2(CurvedMesh<2>),
+    /// Hexes of order 2..=4.
+    Curved3(CurvedMesh<3>),
+}
+
+/// A mesh read by [`parse_any`], with the file's tags for messages.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tagged {
+    /// The mesh.
+    pub mesh: AnyMesh,
+    /// Cell `c` is element `cell_tags[c]` of the file.
+    pub cell_tags: Vec<u64>,
+    /// Node `i` is node `node_tags[i]` of the file.
+    pub node_tags: Vec<u64>,
+}
+
+/// Parses an MSH 4.1 file (ASCII or binary) into the mesh it holds: the
+/// first element block of the highest dimension (2 at least) sets the
+/// dimension and the order. `linear_only` refuses elements of order > 1.
+pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
+    let raw = read::parse(bytes, if linear_only { LINEAR[1] } else { CURVED[1] })?;
+    let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
+    let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
+    let (mesh, cell_tags) = match (top, order) {
+        (3, 1) => raw.hex_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
+        (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
+        (_, 1) => raw.quad_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,
+        _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved2(m), t))?,
+    };
+    Ok(Tagged { mesh, cell_tags, node_tags: raw.node_tags })
+}
+
+#[cfg(test)]
+mod tests;

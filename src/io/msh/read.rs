@@ -1,0 +1,480 @@
+//! One reader of MSH 4.1, ASCII and binary alike. Both hold the same items
+//! in the same order (Gmsh's reference manual, "MSH file format"); a binary
+//! file (file type 1, data size 8) stores the numbers of `$Entities`,
+//! `$Nodes` and `$Elements` as `int` (4 bytes), `size_t` (8 bytes) and
+//! `double` in the writer's byte order, found from the integer 1 after the
+//! format line, and everything else as text. So the section readers below
+//! ask the [`Reader`] for an `int`, a `size_t` or a `double`, and only the
+//! reader knows whether that is a token or bytes.
+
+use std::collections::HashMap;
+use std::str::FromStr;
+
+use super::{syntax, MshError, Pos, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES};
+
+/// What an element type is: its dimension, order and number of nodes.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Kind {
+    /// 0 (point) to 3 (hex).
+    pub dim: usize,
+    /// Lagrange order, 1 for a point.
+    pub order: usize,
+    /// Nodes per element, `(order + 1)^dim`.
+    pub nodes: usize,
+}
+
+/// The kinds of element a caller can store: anything up to `max_dim` and
+/// `max_order`; `phrase` lists them for error messages.
+#[derive(Clone, Copy)]
+pub(super) struct Accept {
+    pub max_dim: usize,
+    pub max_order: usize,
+    pub phrase: &'static str,
+}
+
+impl Accept {
+    /// The kind of MSH element type `t` if it is one of the accepted: a
+    /// point (15), or a Lagrange line, quad or hex of order 1..=4.
+    pub fn kind(&self, t: i64) -> Option<Kind> {
+        let order = |types: &[i64; 4]| types.iter().position(|&x| x == t).map(|i| i + 1);
+        let point = (t == 15).then_some(Kind { dim: 0, order: 1, nodes: 1 });
+        let tables = [(1, &MSH_LINE_TYPES), (2, &MSH_QUAD_TYPES), (3, &MSH_HEX_TYPES)];
+        let kind = tables.into_iter().find_map(|(dim, types)| {
+            order(types).map(|p| Kind { dim, order: p, nodes: (p + 1).pow(dim as u32) })
+        });
+        point.or(kind).filter(|k| k.dim <= self.max_dim && k.order <= self.max_order)
+    }
+}
+
+/// One element block: its entity and type, where its header is, and its
+/// elements' tags and nodes (indices into [`Raw::nodes`], in Gmsh's local
+/// order, `kind.nodes` per element).
+pub(super) struct Block {
+    /// Tag of the entity (of the type's dimension) holding the elements.
+    pub entity: i64,
+    /// MSH element type.
+    pub element_type: i64,
+    /// What that type is.
+    pub kind: Kind,
+    /// Where the block header is.
+    pub at: Pos,
+    /// Element tags.
+    pub tags: Vec<u64>,
+    /// Node indices, `kind.nodes` per element.
+    pub nodes: Vec<usize>,
+}
+
+/// What an MSH file says, before meshes and parts are made of it.
+#[derive(Default)]
+pub(super) struct Raw {
+    /// `(dimension, physical tag, name)` from `$PhysicalNames`.
+    pub physical_names: Vec<(i64, i64, String)>,
+    /// Physical tags of each `(dimension, tag)` entity.
+    pub entity_physicals: HashMap<(usize, i64), Vec<i64>>,
+    /// The file's node tags, in file order (node `i` is `node_tags[i]`).
+    pub node_tags: Vec<u64>,
+    /// Node tag → index into `nodes`.
+    node_index: HashMap<u64, usize>,
+    /// Node coordinates, z included.
+    pub nodes: Vec<[f64; 3]>,
+    /// `(position, tag, z)` of the first node off the plane z = 0.
+    pub off_plane: Option<(Pos, u64, f64)>,
+    /// Element blocks of accepted types, in file order.
+    pub blocks: Vec<Block>,
+    /// Whether `$Nodes` was read (`$Elements` needs it first).
+    has_nodes: bool,
+    /// Where the `$Elements` header is, once read.
+    pub elements_at: Option<Pos>,
+}
+
+/// Reads every section of an MSH 4.1 file; element types other than the
+/// `accept`ed ones are an error at their block header.
+pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
+    let mut r = Reader { bytes, pos: 0, line: 1, binary: None };
+    r.mesh_format()?;
+    let mut raw = Raw::default();
+    while let Some((word, at)) = r.word() {
+        match word {
+            b"$PhysicalNames" => physical_names(&mut r, &mut raw)?,
+            b"$Entities" => entities(r.data(), &mut raw)?,
+            b"$Nodes" => nodes(r.data(), &mut raw)?,
+            b"$Elements" => elements(r.data(), &mut raw, accept)?,
+            w if w.starts_with(b"$") && !w.starts_with(b"$End") => r.skip_section(&w[1..])?,
+            w => return Err(syntax(at, "a section header like `$Nodes`", &lossy(w))),
+        }
+    }
+    if !raw.has_nodes {
+        return Err(MshError::MissingSection("Nodes"));
+    }
+    if raw.elements_at.is_none() {
+        return Err(MshError::MissingSection("Elements"));
+    }
+    Ok(raw)
+}
+
+/// `$PhysicalNames`, text in both formats: `count`, then `dim tag "name"`.
+fn physical_names(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
+    let count: u64 = r.text("the number of physical names")?.0;
+    for _ in 0..count {
+        let dim: i64 = r.text("a physical group dimension")?.0;
+        let tag: i64 = r.text("a physical group tag")?.0;
+        let name = r.quoted("a quoted physical group name")?;
+        raw.physical_names.push((dim, tag, name));
+    }
+    r.expect("$EndPhysicalNames")
+}
+
+/// `$Entities`: counts of points, curves, surfaces, volumes, then each
+/// entity: tag, a point (3) or a bounding box (6), its physical tags and,
+/// above points, its signed bounding entities. Only the physical tags
+/// are kept: they name the boundary parts.
+fn entities(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
+    let mut counts = [0u64; 4];
+    for (dim, c) in counts.iter_mut().enumerate() {
+        *c = r.size(&format!("the number of dimension-{dim} entities"))?.0;
+    }
+    for (dim, &count) in counts.iter().enumerate() {
+        for _ in 0..count {
+            let tag = r.int(&format!("a dimension-{dim} entity tag"))?.0;
+            for _ in 0..if dim == 0 { 3 } else { 6 } {
+                r.float("an entity coordinate")?;
+            }
+            let physicals = tag_list(r, "physical tags")?;
+            if dim > 0 {
+                tag_list(r, "bounding entity tags")?;
+            }
+            raw.entity_physicals.insert((dim, tag), physicals);
+        }
+    }
+    r.expect("$EndEntities")
+}
+
+/// A count followed by that many `int` tags.
+fn tag_list(r: &mut Reader, what: &str) -> Result<Vec<i64>, MshError> {
+    let count = r.size(&format!("the number of {what}"))?.0;
+    let expected = format!("one of {count} {what}");
+    // no capacity from the file: a corrupt count must not allocate wildly
+    let mut tags = Vec::new();
+    for _ in 0..count {
+        tags.push(r.int(&expected)?.0);
+    }
+    Ok(tags)
+}
+
+/// `$Nodes`: header `numBlocks numNodes minTag maxTag`, then the blocks;
+/// the header's count must be what the blocks hold.
+fn nodes(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
+    let at = r.at();
+    let blocks = r.size("the number of node blocks")?.0;
+    let total = r.size("the number of nodes")?.0;
+    r.size("the minimum node tag")?;
+    r.size("the maximum node tag")?;
+    let before = raw.nodes.len();
+    for _ in 0..blocks {
+        node_block(r, raw)?;
+    }
+    let found = (raw.nodes.len() - before) as u64;
+    if found != total {
+        return Err(MshError::CountMismatch { at, what: "number of nodes", expected: total, found });
+    }
+    raw.has_nodes = true;
+    r.expect("$EndNodes")
+}
+
+/// One node block: `dim tag parametric count`, the node tags, then per
+/// node `x y z` and, if parametric, `dim` more values.
+fn node_block(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
+    let (dim, at) = r.int("a node block entity dimension")?;
+    if !(0..=3).contains(&dim) {
+        return Err(syntax(at, "an entity dimension 0..3", &dim.to_string()));
+    }
+    r.int("a node block entity tag")?;
+    let (parametric, at) = r.int("the parametric flag")?;
+    if !(0..=1).contains(&parametric) {
+        return Err(syntax(at, "parametric flag 0 or 1", &parametric.to_string()));
+    }
+    let count = r.size("the number of nodes in the block")?.0;
+    let first = raw.node_tags.len();
+    for _ in 0..count {
+        let (tag, at) = r.size("a node tag")?;
+        if raw.node_index.insert(tag, raw.node_tags.len()).is_some() {
+            return Err(MshError::DuplicateNode { at, tag });
+        }
+        raw.node_tags.push(tag);
+    }
+    for i in first..raw.node_tags.len() {
+        let tag = raw.node_tags[i];
+        let mut x = [0.0; 3];
+        let mut z_at = at;
+        for c in &mut x {
+            (*c, z_at) = r.coordinate(tag)?;
+        }
+        for _ in 0..parametric * dim {
+            r.float("a parametric node coordinate")?;
+        }
+        if x[2] != 0.0 && raw.off_plane.is_none() {
+            raw.off_plane = Some((z_at, tag, x[2]));
+        }
+        raw.nodes.push(x);
+    }
+    Ok(())
+}
+
+/// `$Elements`: header `numBlocks numElements minTag maxTag`, then blocks.
+fn elements(r: &mut Reader, raw: &mut Raw, accept: Accept) -> Result<(), MshError> {
+    let at = r.at();
+    if !raw.has_nodes {
+        return Err(syntax(at, "$Nodes before $Elements", "$Elements"));
+    }
+    let blocks = r.size("the number of element blocks")?.0;
+    let total = r.size("the number of elements")?.0;
+    r.size("the minimum element tag")?;
+    r.size("the maximum element tag")?;
+    let mut found = 0;
+    for _ in 0..blocks {
+        found += element_block(r, raw, accept)?;
+    }
+    if found != total {
+        return Err(MshError::CountMismatch { at, what: "number of elements", expected: total, found });
+    }
+    raw.elements_at = Some(at);
+    r.expect("$EndElements")
+}
+
+/// One element block `dim entity type count` and its elements (`tag`, then
+/// the node tags); returns the number of elements. The type fixes the
+/// number of nodes, so an unknown type cannot even be skipped.
+fn element_block(r: &mut Reader, raw: &mut Raw, accept: Accept) -> Result<u64, MshError> {
+    r.int("an element block entity dimension")?;
+    let entity = r.int("an element block entity tag")?.0;
+    let (element_type, at) = r.int("an element type")?;
+    let Some(kind) = accept.kind(element_type) else {
+        return Err(MshError::UnknownElementType { at, accepted: accept.phrase, element_type });
+    };
+    let count = r.size("the number of elements in the block")?.0;
+    let mut block = Block { entity, element_type, kind, at, tags: Vec::new(), nodes: Vec::new() };
+    for _ in 0..count {
+        let (tag, at) = r.size("an element tag")?;
+        for _ in 0..kind.nodes {
+            let node = r.size("a node tag of an element")?.0;
+            let index = raw.node_index.get(&node).ok_or(MshError::UnknownNode { at, element: tag, tag: node })?;
+            block.nodes.push(*index);
+        }
+        block.tags.push(tag);
+    }
+    raw.blocks.push(block);
+    Ok(count)
+}
+
+/// Bytes for a message (never raw: [`super::shown`] hides non-text).
+fn lossy(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The file's items in order: text tokens with their lines, or, in the
+/// data of a binary file, numbers of fixed size at byte offsets.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    /// 1-based line of `pos` (text only).
+    line: usize,
+    /// `Some(big endian)` once the format line said binary.
+    binary: Option<bool>,
+}
+
+impl<'a> Reader<'a> {
+    /// `$MeshFormat`: version 4.1, ASCII (0) or binary (1) with 8-byte
+    /// `size_t`, whose byte order the integer 1 that follows tells.
+    fn mesh_format(&mut self) -> Result<(), MshError> {
+        self.expect("$MeshFormat")?;
+        let (version, at) = self.token("the MSH version number")?;
+        if version != b"4.1" {
+            return Err(MshError::UnsupportedVersion { at, version: lossy(version) });
+        }
+        let (file_type, type_at) = self.token("the file type (0 = ASCII, 1 = binary)")?;
+        let (size, at) = self.text::<u64>("the data size")?;
+        match file_type {
+            b"0" => {}
+            b"1" if size == 8 => {
+                self.skip_line();
+                let (one, at) = self.take::<4>("the integer 1 in binary")?;
+                self.binary = Some(match (i32::from_le_bytes(one), i32::from_be_bytes(one)) {
+                    (1, _) => false,
+                    (_, 1) => true,
+                    _ => return Err(syntax(at, "the integer 1 in binary", &format!("{one:?}"))),
+                });
+            }
+            b"1" => return Err(syntax(at, "data size 8 in a binary file", &size.to_string())),
+            s => return Err(syntax(type_at, "file type 0 (ASCII) or 1 (binary)", &lossy(s))),
+        }
+        self.expect("$EndMeshFormat")
+    }
+
+    /// After a section header of a binary file, its data start on the
+    /// next line: moves past the header's line break.
+    fn data(&mut self) -> &mut Self {
+        if self.binary.is_some() {
+            self.skip_line();
+        }
+        self
+    }
+
+    /// Moves past the next line break.
+    fn skip_line(&mut self) {
+        let rest = &self.bytes[self.pos..];
+        self.pos += rest.iter().position(|&b| b == b'\n').map_or(rest.len(), |k| k + 1);
+    }
+
+    /// Moves past whitespace, counting line breaks.
+    fn skip_whitespace(&mut self) {
+        while let Some(&b) = self.bytes.get(self.pos).filter(|b| b.is_ascii_whitespace()) {
+            self.line += usize::from(b == b'\n');
+            self.pos += 1;
+        }
+    }
+
+    /// Where the next item starts: its line in text, its byte offset in
+    /// binary data (where whitespace is data, not a separator).
+    fn at(&mut self) -> Pos {
+        match self.binary {
+            Some(_) => Pos::Byte(self.pos),
+            None => {
+                self.skip_whitespace();
+                Pos::Line(self.line)
+            }
+        }
+    }
+
+    /// Where the file ends, for truncation errors: its last line (not the
+    /// empty one after a final line break), or its length.
+    fn end(&self) -> Pos {
+        match self.binary {
+            Some(_) => Pos::Byte(self.bytes.len()),
+            None => {
+                let breaks = self.bytes.iter().filter(|&&b| b == b'\n').count();
+                let unterminated = !self.bytes.is_empty() && !self.bytes.ends_with(b"\n");
+                Pos::Line((breaks + usize::from(unterminated)).max(1))
+            }
+        }
+    }
+
+    /// The next whitespace-separated word and where it starts, if any.
+    fn word(&mut self) -> Option<(&'a [u8], Pos)> {
+        self.skip_whitespace();
+        let at = if self.binary.is_some() { Pos::Byte(self.pos) } else { Pos::Line(self.line) };
+        let rest = &self.bytes[self.pos..];
+        let len = rest.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(rest.len());
+        self.pos += len;
+        (len > 0).then(|| (&rest[..len], at))
+    }
+
+    /// The next word; a truncation error naming `expected` at the end.
+    fn token(&mut self, expected: &str) -> Result<(&'a [u8], Pos), MshError> {
+        self.word().ok_or_else(|| MshError::Truncated { at: self.end(), expected: expected.to_string() })
+    }
+
+    /// The next word parsed as `T`.
+    fn text<T: FromStr>(&mut self, expected: &str) -> Result<(T, Pos), MshError> {
+        let (word, at) = self.token(expected)?;
+        let value = std::str::from_utf8(word).ok().and_then(|s| s.parse().ok());
+        value.map(|v| (v, at)).ok_or_else(|| syntax(at, expected, &lossy(word)))
+    }
+
+    /// Requires the next word to be exactly `word`.
+    fn expect(&mut self, word: &str) -> Result<(), MshError> {
+        let (found, at) = self.token(word)?;
+        if found == word.as_bytes() {
+            Ok(())
+        } else {
+            Err(syntax(at, word, &lossy(found)))
+        }
+    }
+
+    /// `N` bytes of binary data.
+    fn take<const N: usize>(&mut self, expected: &str) -> Result<([u8; N], Pos), MshError> {
+        let at = Pos::Byte(self.pos);
+        let bytes = self.bytes.get(self.pos..self.pos + N).ok_or_else(|| MshError::Truncated { at, expected: expected.to_string() })?;
+        self.pos += N;
+        Ok((bytes.try_into().expect("N bytes"), at))
+    }
+
+    /// An `int`: 4 bytes in binary data.
+    fn int(&mut self, expected: &str) -> Result<(i64, Pos), MshError> {
+        match self.binary {
+            Some(big) => self.take(expected).map(|(b, at)| (i64::from(if big { i32::from_be_bytes(b) } else { i32::from_le_bytes(b) }), at)),
+            None => self.text(expected),
+        }
+    }
+
+    /// A `size_t`: 8 bytes in binary data.
+    fn size(&mut self, expected: &str) -> Result<(u64, Pos), MshError> {
+        match self.binary {
+            Some(big) => self.take(expected).map(|(b, at)| (if big { u64::from_be_bytes(b) } else { u64::from_le_bytes(b) }, at)),
+            None => self.text(expected),
+        }
+    }
+
+    /// A `double`: 8 bytes in binary data.
+    fn float(&mut self, expected: &str) -> Result<(f64, Pos), MshError> {
+        match self.binary {
+            Some(big) => self.take(expected).map(|(b, at)| (if big { f64::from_be_bytes(b) } else { f64::from_le_bytes(b) }, at)),
+            None => self.text(expected),
+        }
+    }
+
+    /// A coordinate of node `tag`; NaN and infinities are refused, shown
+    /// as the file spells them. The message of a bad token is only made on
+    /// error: formatting one per value would dominate large files.
+    fn coordinate(&mut self, tag: u64) -> Result<(f64, Pos), MshError> {
+        let (x, at, word) = match self.binary {
+            Some(_) => {
+                let (x, at) = self.float("a node coordinate")?;
+                (x, at, None)
+            }
+            None => {
+                let (word, at) = self.token("a node coordinate")?;
+                let parsed = std::str::from_utf8(word).ok().and_then(|s| s.parse().ok());
+                let x = parsed.ok_or_else(|| syntax(at, &format!("a coordinate of node {tag}"), &lossy(word)))?;
+                (x, at, Some(word))
+            }
+        };
+        if x.is_finite() {
+            return Ok((x, at));
+        }
+        let value = word.map_or_else(|| x.to_string(), lossy);
+        Err(MshError::NonFinite { at, tag, value })
+    }
+
+    /// A double-quoted string on one line (it may contain spaces).
+    fn quoted(&mut self, expected: &str) -> Result<String, MshError> {
+        self.skip_whitespace(); // text in binary files too
+        let at = self.at();
+        let rest = &self.bytes[self.pos..];
+        let Some(body) = rest.strip_prefix(b"\"") else {
+            return Err(match self.word() {
+                Some((found, _)) => syntax(at, expected, &lossy(found)),
+                None => MshError::Truncated { at, expected: expected.to_string() },
+            });
+        };
+        let line = &body[..body.iter().position(|&b| b == b'\n').unwrap_or(body.len())];
+        let Some(len) = line.iter().position(|&b| b == b'"') else {
+            let found = lossy(&rest[..line.len() + 1]);
+            return Err(syntax(at, &format!("{expected} (closing quote)"), found.trim_end()));
+        };
+        self.pos += len + 2;
+        Ok(lossy(&body[..len]))
+    }
+
+    /// Skips a section this reader does not use up to its `$End<name>`,
+    /// by bytes: its data may be binary.
+    fn skip_section(&mut self, name: &[u8]) -> Result<(), MshError> {
+        let end = [b"$End", name].concat();
+        let rest = &self.bytes[self.pos..];
+        let Some(k) = rest.windows(end.len()).position(|w| w == end) else {
+            return Err(MshError::Truncated { at: self.end(), expected: lossy(&end) });
+        };
+        self.line += rest[..k].iter().filter(|&&b| b == b'\n').count();
+        self.pos += k + end.len();
+        Ok(())
+    }
+}

@@ -1,0 +1,342 @@
+//! The mesh of any order: order-`p` Lagrange quads (`D = 2`) or hexes
+//! (`D = 3`) with their nodes in tensor order ([`super::element`]), and
+//! boundary elements of dimension `D − 1` in named parts. A linear mesh is
+//! the case `p = 1` ([`CurvedMesh::from_quads`], [`CurvedMesh::from_hexes`]),
+//! which is how the file writers take meshes of any order.
+
+use super::element::basis::{tensor_map, Basis1d};
+use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
+use super::{HexMesh, QuadMesh};
+
+/// One boundary element: an order-`p` line (2D meshes) or quad (3D
+/// meshes) with its nodes in tensor order, and its part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurvedBoundary {
+    /// `p + 1` (line) or `(p+1)²` (quad) node indices in tensor order. The
+    /// orientation is kept as given (2D convention: domain on the left).
+    pub nodes: Vec<usize>,
+    /// Index into [`CurvedMesh::part_names`].
+    pub part: usize,
+}
+
+/// A mesh of order-`p` Lagrange quads (`D = 2`) or hexes (`D = 3`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurvedMesh<const D: usize> {
+    /// Element order, `1..=4`.
+    pub p: usize,
+    /// Where the element nodes sit in the reference cell.
+    pub spacing: Spacing,
+    /// Node coordinates.
+    pub nodes: Vec<[f64; D]>,
+    /// Cells, `(p+1)^D` node indices each, in tensor order.
+    pub cells: Vec<Vec<usize>>,
+    /// Boundary elements (dimension `D − 1`) with their parts.
+    pub boundary: Vec<CurvedBoundary>,
+    /// Names of the boundary parts (physical groups of dimension `D − 1`).
+    pub part_names: Vec<String>,
+}
+
+impl<const D: usize> CurvedMesh<D> {
+    /// A structured mesh of `n[0] × … × n[D−1]` order-`p` cells of the unit
+    /// box `[0,1]^D`, its nodes then moved by `map`. Nodes are numbered
+    /// first axis fastest on the global grid of `n_d p + 1` nodes per axis,
+    /// at `(cell + t_i) / n_d` with `t = nodes_1d(p, spacing)`. Boundary
+    /// parts are the box sides `"xmin", "xmax", "ymin", "ymax"(, "zmin",
+    /// "zmax")`; in 2D the edges run with the domain on their left, in 3D
+    /// the faces list their nodes over the remaining axes in increasing
+    /// order (no orientation promised).
+    pub fn structured(
+        p: usize,
+        spacing: Spacing,
+        n: [usize; D],
+        map: impl Fn([f64; D]) -> [f64; D],
+    ) -> Result<CurvedMesh<D>, HighOrderError> {
+        let t = nodes_1d(p, spacing)?;
+        let dims: [usize; D] = std::array::from_fn(|d| n[d] * p + 1);
+        let id = |g: [usize; D]| (0..D).rev().fold(0, |acc, d| acc * dims[d] + g[d]);
+        let coord = |g: usize, d: usize| {
+            let (c, i) = if g == dims[d] - 1 {
+                (n[d] - 1, p)
+            } else {
+                (g / p, g % p)
+            };
+            (c as f64 + t[i]) / n[d] as f64
+        };
+        let total: usize = dims.iter().product();
+        let nodes = (0..total)
+            .map(|a| {
+                let mut rest = a;
+                let x: [f64; D] = std::array::from_fn(|d| {
+                    let g = rest % dims[d];
+                    rest /= dims[d];
+                    coord(g, d)
+                });
+                map(x)
+            })
+            .collect();
+        let q = p + 1;
+        // tensor nodes of a block starting at global index `base`, spanning
+        // the axes `axes` (in that order), q nodes each
+        let block = |base: [usize; D], axes: &[usize]| -> Vec<usize> {
+            (0..q.pow(axes.len() as u32))
+                .map(|a| {
+                    let mut g = base;
+                    let mut rest = a;
+                    for &d in axes {
+                        g[d] += rest % q;
+                        rest /= q;
+                    }
+                    id(g)
+                })
+                .collect()
+        };
+        let ncells: usize = n.iter().product();
+        let all_axes: Vec<usize> = (0..D).collect();
+        let cell_index = |c: usize| -> [usize; D] {
+            let mut rest = c;
+            std::array::from_fn(|d| {
+                let i = rest % n[d];
+                rest /= n[d];
+                i
+            })
+        };
+        let cells = (0..ncells)
+            .map(|c| block(cell_index(c).map(|i| i * p), &all_axes))
+            .collect();
+        let mut boundary = Vec::new();
+        for d in 0..D {
+            let others: Vec<usize> = (0..D).filter(|&e| e != d).collect();
+            for side in 0..2 {
+                for c in (0..ncells)
+                    .map(cell_index)
+                    .filter(|ci| ci[d] == side * (n[d] - 1))
+                {
+                    let mut base = c.map(|i| i * p);
+                    base[d] = side * (dims[d] - 1);
+                    let mut nodes = block(base, &others);
+                    // 2D: bottom (d=1, side 0) and right (d=0, side 1) run
+                    // with increasing coordinate, top and left against it
+                    if D == 2 && (d == 0) == (side == 0) {
+                        nodes.reverse();
+                    }
+                    boundary.push(CurvedBoundary {
+                        nodes,
+                        part: 2 * d + side,
+                    });
+                }
+            }
+        }
+        let names = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
+        Ok(CurvedMesh {
+            p,
+            spacing,
+            nodes,
+            cells,
+            boundary,
+            part_names: names[..2 * D].iter().map(|s| s.to_string()).collect(),
+        })
+    }
+
+    /// Number of nodes of a cell, `(p+1)^D`.
+    pub fn nodes_per_cell(&self) -> usize {
+        (self.p + 1).pow(D as u32)
+    }
+
+    /// The coordinates of cell `c`'s nodes in tensor order.
+    pub fn cell_coords(&self, c: usize) -> Vec<[f64; D]> {
+        self.cells[c].iter().map(|&v| self.nodes[v]).collect()
+    }
+
+    /// Rejects what no file can represent: an order outside `1..=4`,
+    /// cells or boundary elements with the wrong number of nodes, dangling
+    /// node or part indices, non-finite coordinates and part names that
+    /// are empty, repeated or unquotable.
+    pub fn validate(&self) -> Result<(), String> {
+        if check_order(self.p).is_err() {
+            return Err(format!("order {} is not in 1..={MAX_ORDER}", self.p));
+        }
+        if !(2..=3).contains(&D) {
+            return Err(format!("{D}D meshes are not supported"));
+        }
+        let n = self.nodes.len();
+        if let Some(i) = self
+            .nodes
+            .iter()
+            .position(|x| !x.iter().all(|v| v.is_finite()))
+        {
+            return Err(format!(
+                "node {i} has a non-finite coordinate {:?}",
+                self.nodes[i]
+            ));
+        }
+        let per_cell = self.nodes_per_cell();
+        for (c, cell) in self.cells.iter().enumerate() {
+            if cell.len() != per_cell {
+                return Err(format!(
+                    "cell {c} has {} nodes, expected {per_cell}",
+                    cell.len()
+                ));
+            }
+            if cell.iter().any(|&v| v >= n) {
+                return Err(format!("cell {c} refers to a node >= {n}"));
+            }
+        }
+        let per_face = (self.p + 1).pow(D as u32 - 1);
+        let word = if D == 2 { "boundary edge" } else { "boundary face" };
+        for (e, b) in self.boundary.iter().enumerate() {
+            if b.nodes.len() != per_face || b.nodes.iter().any(|&v| v >= n) {
+                return Err(format!(
+                    "{word} {e} needs {per_face} nodes < {n}, has {:?}",
+                    b.nodes
+                ));
+            }
+            if b.part >= self.part_names.len() {
+                return Err(format!(
+                    "{word} {e} has part {} of {}",
+                    b.part,
+                    self.part_names.len()
+                ));
+            }
+        }
+        for (i, name) in self.part_names.iter().enumerate() {
+            if name.is_empty() || name.contains(['"', '\n', '\r']) {
+                return Err(format!(
+                    "part name {name:?} is empty or contains a quote or line break"
+                ));
+            }
+            if self.part_names[..i].contains(name) {
+                return Err(format!("part name {name:?} appears twice"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The same mesh with equispaced element nodes: each node moved to the
+    /// image, under the map of the first cell that holds it, of the
+    /// equispaced reference node with its tensor index. A no-op (a clone)
+    /// for an equispaced mesh. Nodes in no cell stay where they are.
+    /// Panics if the mesh fails [`CurvedMesh::validate`].
+    pub fn to_equispaced(&self) -> CurvedMesh<D> {
+        let mut out = self.clone();
+        if self.spacing == Spacing::Equispaced {
+            return out;
+        }
+        let basis = Basis1d::new(self.p, self.spacing).expect("order checked by validate");
+        let t = nodes_1d(self.p, Spacing::Equispaced).expect("order checked by validate");
+        let n = self.p + 1;
+        let mut done = vec![false; self.nodes.len()];
+        for cell in &self.cells {
+            let ctrl: Vec<[f64; D]> = cell.iter().map(|&v| self.nodes[v]).collect();
+            for (a, &v) in cell.iter().enumerate() {
+                if std::mem::replace(&mut done[v], true) {
+                    continue;
+                }
+                let mut rest = a;
+                let xi: [f64; D] = std::array::from_fn(|_| {
+                    let i = rest % n;
+                    rest /= n;
+                    t[i]
+                });
+                out.nodes[v] = tensor_map(&basis, &ctrl, xi).0;
+            }
+        }
+        out.spacing = Spacing::Equispaced;
+        out
+    }
+}
+
+
+impl CurvedMesh<2> {
+    /// The linear quad mesh as the order-1 case (cells and edges keep
+    /// their nodes, in tensor order), for code written for any order.
+    pub fn from_quads(m: &QuadMesh) -> Self {
+        let perm = gmsh_quad_order(1).expect("order 1");
+        let cells = m.cells.iter().map(|c| from_format(&perm, c)).collect();
+        let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
+        CurvedMesh { p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+    }
+}
+
+impl CurvedMesh<3> {
+    /// The linear hex mesh as the order-1 case (see [`CurvedMesh::from_quads`]).
+    pub fn from_hexes(m: &HexMesh) -> Self {
+        let (cell, face) = (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1"));
+        let cells = m.cells.iter().map(|c| from_format(&cell, c)).collect();
+        let boundary = m.faces.iter().map(|f| CurvedBoundary { nodes: from_format(&face, &f.nodes), part: f.part }).collect();
+        CurvedMesh { p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+    }
+}
+
+#[cfg(test)]
+/// Tests, and bent test meshes the MSH and VTU tests share (`pub`: a
+/// test module as `scripts/deps.py` recognises one).
+pub mod tests {
+    use super::*;
+    use crate::highorder::{certify_hex, certify_quad, hex_map, quad_map};
+
+    /// Smooth non-affine maps of the unit square and cube, for test meshes
+    /// (also of the file tests).
+    pub(crate) fn bend2([x, y]: [f64; 2]) -> [f64; 2] {
+        [x + 0.1 * (2.0 * y).sin(), y + 0.15 * x * x]
+    }
+
+    /// See [`bend2`].
+    pub(crate) fn bend3([x, y, z]: [f64; 3]) -> [f64; 3] {
+        [x + 0.1 * (2.0 * y).sin(), y + 0.1 * x * z, z - 0.1 * x * x]
+    }
+
+    #[test]
+    fn structured_mesh_is_consistent_and_valid() {
+        let m = CurvedMesh::<2>::structured(3, Spacing::Equispaced, [2, 3], bend2).unwrap();
+        m.validate().unwrap();
+        assert_eq!(m.nodes.len(), 7 * 10);
+        assert_eq!(m.cells.len(), 6);
+        assert_eq!(m.boundary.len(), 2 * (2 + 3));
+        for c in 0..m.cells.len() {
+            assert!(certify_quad(3, m.spacing, &m.cell_coords(c)).unwrap().valid);
+        }
+        // bottom edge of cell 0 runs along +x: its nodes are the cell's
+        // first row; left edge runs downwards (domain on the left)
+        assert_eq!(
+            m.boundary.iter().find(|b| b.part == 2).unwrap().nodes,
+            m.cells[0][..4]
+        );
+        let left = &m.boundary.iter().find(|b| b.part == 0).unwrap().nodes;
+        assert_eq!(left[0], m.cells[0][12]);
+        assert_eq!(left[3], m.cells[0][0]);
+        let h = CurvedMesh::<3>::structured(2, Spacing::GaussLobatto, [2, 1, 1], bend3).unwrap();
+        h.validate().unwrap();
+        assert_eq!(h.boundary.len(), 2 * (1 + 2 + 2));
+        assert!(certify_hex(2, h.spacing, &h.cell_coords(1)).unwrap().valid);
+    }
+
+    /// Resampling a Gauss–Lobatto mesh keeps the geometry: the equispaced
+    /// element maps the same points (same polynomial space).
+    #[test]
+    fn gauss_lobatto_mesh_is_resampled_onto_the_same_map() {
+        let g = CurvedMesh::<2>::structured(4, Spacing::GaussLobatto, [2, 2], bend2).unwrap();
+        let e = g.to_equispaced();
+        assert_eq!(e.spacing, Spacing::Equispaced);
+        let h = CurvedMesh::<3>::structured(3, Spacing::GaussLobatto, [1, 1, 2], bend3).unwrap();
+        let he = h.to_equispaced();
+        for xi in [[0.1, 0.2], [0.77, 0.5], [0.33, 0.91]] {
+            for c in 0..4 {
+                let a = quad_map(4, Spacing::GaussLobatto, &g.cell_coords(c), xi)
+                    .unwrap()
+                    .0;
+                let b = quad_map(4, Spacing::Equispaced, &e.cell_coords(c), xi)
+                    .unwrap()
+                    .0;
+                assert!((a[0] - b[0]).abs() < 1e-13 && (a[1] - b[1]).abs() < 1e-13);
+            }
+            let x3 = [xi[0], xi[1], 0.4];
+            let a = hex_map(3, Spacing::GaussLobatto, &h.cell_coords(1), x3)
+                .unwrap()
+                .0;
+            let b = hex_map(3, Spacing::Equispaced, &he.cell_coords(1), x3)
+                .unwrap()
+                .0;
+            assert!((0..3).all(|d| (a[d] - b[d]).abs() < 1e-13));
+        }
+    }
+}
