@@ -20,48 +20,76 @@ const CREASE_SAMPLES: usize = 128;
 /// bracketing its first crossing numerically.
 const SUPERQUADRIC_RAY_SAMPLES: usize = 512;
 
+/// The gauge `N(w) = (Σ |w_k/a_k|^n)^(1/n)` in `D` dimensions, whose unit
+/// level set is the superellipse (`D` = 2) or the superquadric (`D` = 3).
+/// It is positively homogeneous of degree 1, so `w / N(w)` projects any
+/// non-zero local vector radially onto the shape: the parametrisation
+/// every numeric query evaluates, so results are on the shape to machine
+/// precision.
+#[derive(Debug, Clone)]
+pub(super) struct Gauge<const D: usize> {
+    /// The semi-axes.
+    pub(super) a: [f64; D],
+    /// The exponent.
+    pub(super) n: f64,
+}
+
+impl<const D: usize> Gauge<D> {
+    /// `N(w)`, with the largest term factored out so that large `n`
+    /// neither overflows nor underflows.
+    fn norm(&self, w: [f64; D]) -> f64 {
+        let t: [f64; D] = std::array::from_fn(|k| (w[k] / self.a[k]).abs());
+        let big = t.iter().fold(t[0], |m, &x| m.max(x));
+        if big == 0.0 {
+            return 0.0;
+        }
+        let sum: f64 = t.iter().map(|x| (x / big).powf(self.n)).sum();
+        big * sum.powf(1.0 / self.n)
+    }
+
+    /// Radial projection of a non-zero local vector onto the shape.
+    fn project(&self, w: [f64; D]) -> [f64; D] {
+        scale(1.0 / self.norm(w), w)
+    }
+
+    /// Outward normal direction (not unit) at local point `x` on the
+    /// shape, from the implicit gradient. For n < 1 the gradient is
+    /// multiplied by `Π |x_k/a_k|^(1−n)`, which removes its poles on the
+    /// cusps (creases) and leaves one of the one-sided normals there.
+    fn normal_dir(&self, x: [f64; D]) -> [f64; D] {
+        let t: [f64; D] = std::array::from_fn(|k| (x[k] / self.a[k]).abs());
+        let m = 1.0 - self.n;
+        std::array::from_fn(|k| {
+            let s = x[k].signum() / self.a[k];
+            if self.n >= 1.0 {
+                s * t[k].powf(self.n - 1.0)
+            } else {
+                (1..D).fold(s, |acc, j| acc * t[(k + j) % D].powf(m))
+            }
+        })
+    }
+}
+
 /// Superellipse `|x/a|^n + |y/b|^n = 1`, parametrised by the polar angle
 /// about its centre (a star-shaped curve, so every angle gives one point;
 /// unlike the usual `cos^(2/n)` form this does not crowd points together).
 #[derive(Debug, Clone)]
 pub(super) struct Superellipse {
     pub(super) centre: [f64; 2],
-    pub(super) a: f64,
-    pub(super) b: f64,
-    pub(super) n: f64,
+    gauge: Gauge<2>,
     pub(super) samples: Samples,
 }
 
 impl Superellipse {
-    pub(super) fn new(centre: [f64; 2], semi_axes: [f64; 2], n: f64) -> Superellipse {
-        let mut s = Superellipse {
-            centre,
-            a: semi_axes[0],
-            b: semi_axes[1],
-            n,
-            samples: Samples::empty(),
-        };
+    pub(super) fn new(centre: [f64; 2], a: [f64; 2], n: f64) -> Superellipse {
+        let mut s = Superellipse { centre, gauge: Gauge { a, n }, samples: Samples::empty() };
         let params: Vec<f64> = (0..256).map(|k| TAU * k as f64 / 256.0).collect();
         s.samples = Samples::new(&s, &params, Some(TAU));
         s
     }
 
-    /// Outward normal direction (not unit) at local point `(x, y)` on the
-    /// curve, from the implicit gradient, rescaled so it stays finite: for
-    /// n ≥ 1 the gradient itself; for n < 1 the gradient times
-    /// `|x/a|^(1−n) |y/b|^(1−n)`, which removes its poles at the cusps.
-    pub(super) fn normal_dir(&self, x: f64, y: f64) -> [f64; 2] {
-        let (u, v) = ((x / self.a).abs(), (y / self.b).abs());
-        let (su, sv) = (x.signum() / self.a, y.signum() / self.b);
-        if self.n >= 1.0 {
-            [su * u.powf(self.n - 1.0), sv * v.powf(self.n - 1.0)]
-        } else {
-            [su * v.powf(1.0 - self.n), sv * u.powf(1.0 - self.n)]
-        }
-    }
-
     pub(super) fn ray_hit(&self, origin: [f64; 2], dir: [f64; 2]) -> Option<[f64; 2]> {
-        let size = self.a.max(self.b);
+        let size = self.gauge.a[0].max(self.gauge.a[1]);
         if norm(sub(origin, self.centre)) <= 1e-15 * size {
             // From the centre, the ray's angle is the polar parameter.
             return Some(self.point(dir[1].atan2(dir[0])));
@@ -74,36 +102,26 @@ impl Superellipse {
 impl Param for Superellipse {
     fn point(&self, phi: f64) -> [f64; 2] {
         let (s, c) = phi.sin_cos();
-        // r = (|c/a|^n + |s/b|^n)^(-1/n), with the larger term factored out
-        // so that large n neither overflows nor underflows.
-        let (u, v) = ((c / self.a).abs(), (s / self.b).abs());
-        let (big, small) = if u >= v { (u, v) } else { (v, u) };
-        let r = 1.0 / (big * (1.0 + (small / big).powf(self.n)).powf(1.0 / self.n));
-        add(self.centre, [r * c, r * s])
+        add(self.centre, self.gauge.project([c, s]))
     }
 
     fn tangent(&self, phi: f64) -> [f64; 2] {
         let q = sub(self.point(phi), self.centre);
         // The polar angle increases counter-clockwise along the curve.
-        rot_ccw(unit(self.normal_dir(q[0], q[1])))
+        rot_ccw(unit(self.gauge.normal_dir(q)))
     }
 }
-/// Superquadric `|x/a|^n + |y/b|^n + |z/c|^n = 1` about `centre`.
-///
-/// It is star-shaped about its centre, and `N(w) = (Σ |w_k/a_k|^n)^(1/n)`
-/// is positively homogeneous of degree 1, so `w / N(w)` projects any
-/// non-zero local vector radially onto the surface. That projection is the
-/// parametrisation every numeric query evaluates, so results are on the
-/// surface to machine precision.
+
+/// Superquadric `|x/a|^n + |y/b|^n + |z/c|^n = 1` about `centre` (see
+/// [`Gauge`]).
 #[derive(Debug, Clone)]
 pub(super) struct Superquadric {
     pub(super) centre: [f64; 3],
-    pub(super) a: [f64; 3],
-    pub(super) n: f64,
+    pub(super) gauge: Gauge<3>,
     /// Largest semi-axis: the length scale.
-    pub(super) size: f64,
+    size: f64,
     /// Local surface points on a coarse direction grid, seeding the search.
-    pub(super) seeds: Vec<[f64; 3]>,
+    seeds: Vec<[f64; 3]>,
 }
 
 /// Directions through the grid points of the cube `[-1, 1]³`'s faces,
@@ -147,59 +165,19 @@ struct ChartPoint {
 
 impl Superquadric {
     pub(super) fn new(centre: [f64; 3], a: [f64; 3], n: f64) -> Superquadric {
-        let mut s = Superquadric {
-            centre,
-            a,
-            n,
-            size: a[0].max(a[1]).max(a[2]),
-            seeds: vec![],
-        };
+        let mut s = Superquadric { centre, gauge: Gauge { a, n }, size: a[0].max(a[1]).max(a[2]), seeds: vec![] };
         s.seeds = cube_directions(SUPERQUADRIC_SEED_CELLS)
             .into_iter()
-            .map(|w| s.project(w))
+            .map(|w| s.gauge.project(w))
             .collect();
         s
-    }
-
-    /// `N(w) = (Σ |w_k/a_k|^n)^(1/n)`, with the largest term factored out
-    /// so that large `n` neither overflows nor underflows.
-    pub(super) fn radial_norm(&self, w: [f64; 3]) -> f64 {
-        let t = [0, 1, 2].map(|k| (w[k] / self.a[k]).abs());
-        let big = t[0].max(t[1]).max(t[2]);
-        if big == 0.0 {
-            return 0.0;
-        }
-        let sum: f64 = t.iter().map(|x| (x / big).powf(self.n)).sum();
-        big * sum.powf(1.0 / self.n)
-    }
-
-    /// Radial projection of a non-zero local vector onto the surface.
-    pub(super) fn project(&self, w: [f64; 3]) -> [f64; 3] {
-        scale(1.0 / self.radial_norm(w), w)
     }
 
     /// `∇N(w)`; infinite on a coordinate plane when `n < 1` (the creases).
     fn grad_norm(&self, w: [f64; 3], nw: f64) -> [f64; 3] {
         [0, 1, 2].map(|k| {
-            let t = (w[k] / self.a[k]).abs() / nw;
-            w[k].signum() / self.a[k] * t.powf(self.n - 1.0)
-        })
-    }
-
-    /// Outward normal direction (not unit) at local point `x` on the
-    /// surface, from the implicit gradient. For n < 1 the gradient is
-    /// multiplied by `Π |x_k/a_k|^(1−n)`, which removes its poles on the
-    /// creases and leaves one of the one-sided normals there.
-    pub(super) fn normal_dir(&self, x: [f64; 3]) -> [f64; 3] {
-        let t = [0, 1, 2].map(|k| (x[k] / self.a[k]).abs());
-        let m = 1.0 - self.n;
-        [0, 1, 2].map(|k| {
-            let s = x[k].signum() / self.a[k];
-            if self.n >= 1.0 {
-                s * t[k].powf(self.n - 1.0)
-            } else {
-                s * t[(k + 1) % 3].powf(m) * t[(k + 2) % 3].powf(m)
-            }
+            let t = (w[k] / self.gauge.a[k]).abs() / nw;
+            w[k].signum() / self.gauge.a[k] * t.powf(self.gauge.n - 1.0)
         })
     }
 
@@ -209,11 +187,11 @@ impl Superquadric {
     /// surrounding smooth surface seen from outside it.
     pub(super) fn normal_at(&self, q: [f64; 3]) -> [f64; 3] {
         let x = sub(q, self.centre);
-        let nd = self.normal_dir(x);
+        let nd = self.gauge.normal_dir(x);
         if nd != [0.0; 3] {
             return unit(nd);
         }
-        let t = [0, 1, 2].map(|k| (x[k] / self.a[k]).abs());
+        let t = [0, 1, 2].map(|k| (x[k] / self.gauge.a[k]).abs());
         let k = (0..3).fold(0, |b, k| if t[k] > t[b] { k } else { b });
         let mut axis = [0.0; 3];
         axis[k] = 1.0f64.copysign(x[k]);
@@ -239,20 +217,20 @@ impl Superquadric {
             }
         };
         if q != [0.0; 3] {
-            let radial = self.project(q);
+            let radial = self.gauge.project(q);
             consider(radial);
             consider(self.refine_patch(q, radial));
         }
         for seed in self.nearest_seeds(q) {
             consider(self.refine_patch(q, seed));
         }
-        if self.n <= 1.0 {
+        if self.gauge.n <= 1.0 {
             for k in 0..3 {
                 consider(self.crease_closest(q, k));
                 let mut tip = [0.0; 3];
-                tip[k] = self.a[k];
+                tip[k] = self.gauge.a[k];
                 consider(tip);
-                tip[k] = -self.a[k];
+                tip[k] = -self.gauge.a[k];
                 consider(tip);
             }
         }
@@ -285,7 +263,7 @@ impl Superquadric {
         ab: [f64; 2],
     ) -> Option<ChartPoint> {
         let w = add(x, add(scale(ab[0], e[0]), scale(ab[1], e[1])));
-        let nw = self.radial_norm(w);
+        let nw = self.gauge.norm(w);
         let point = scale(1.0 / nw, w);
         let g = self.grad_norm(w, nw);
         // d(w/N) = (dw − P (∇N·dw)) / N
@@ -310,7 +288,7 @@ impl Superquadric {
         let mut x = seed;
         let mut g = dist2(x, q);
         for _ in 0..100 {
-            let nd = self.normal_dir(x);
+            let nd = self.gauge.normal_dir(x);
             if !nd.iter().all(|v| v.is_finite()) || nd == [0.0; 3] {
                 break;
             }
@@ -385,7 +363,7 @@ impl Superquadric {
         g: f64,
     ) -> Option<([f64; 3], f64)> {
         let d = step.d;
-        let at = |t: f64| self.project(add(x, add(scale(t * d[0], e[0]), scale(t * d[1], e[1]))));
+        let at = |t: f64| self.gauge.project(add(x, add(scale(t * d[0], e[0]), scale(t * d[1], e[1]))));
         if step.newton && d[0].hypot(d[1]) <= 1e-4 * self.size {
             let c = self.chart(q, x, e, d)?;
             if c.grad[0].hypot(c.grad[1]) <= 0.5 * step.grad[0].hypot(step.grad[1]) {
@@ -415,7 +393,7 @@ impl Superquadric {
         let point = |phi: f64| {
             let mut w = [0.0; 3];
             (w[j], w[i]) = phi.sin_cos();
-            self.project(w)
+            self.gauge.project(w)
         };
         let f = |phi: f64| dist2(point(phi), q);
         let step = TAU / CREASE_SAMPLES as f64;
@@ -436,7 +414,7 @@ impl Superquadric {
         let o = sub(origin, self.centre);
         if norm(o) <= 1e-15 * self.size {
             // From the centre the hit is the radial projection of `dir`.
-            return Some(add(self.centre, self.project(dir)));
+            return Some(add(self.centre, self.gauge.project(dir)));
         }
         // The surface lies in the box |x_k| ≤ a_k: only the ray's chord
         // through it needs searching.
@@ -446,20 +424,20 @@ impl Superquadric {
         );
         for k in 0..3 {
             if dir[k] == 0.0 {
-                if o[k].abs() > self.a[k] {
+                if o[k].abs() > self.gauge.a[k] {
                     return None;
                 }
                 continue;
             }
-            let (s1, s2) = ((-self.a[k] - o[k]) / dir[k], (self.a[k] - o[k]) / dir[k]);
+            let (s1, s2) = ((-self.gauge.a[k] - o[k]) / dir[k], (self.gauge.a[k] - o[k]) / dir[k]);
             lo = lo.max(s1.min(s2));
             hi = hi.min(s1.max(s2));
         }
         if lo >= hi || lo.is_nan() || hi.is_nan() {
             return None;
         }
-        let f = |s: f64| self.radial_norm(add(o, scale(s, dir))) - 1.0;
+        let f = |s: f64| self.gauge.norm(add(o, scale(s, dir))) - 1.0;
         let s = first_crossing(&f, lo, hi, SUPERQUADRIC_RAY_SAMPLES)?;
-        Some(add(self.centre, self.project(add(o, scale(s, dir)))))
+        Some(add(self.centre, self.gauge.project(add(o, scale(s, dir)))))
     }
 }

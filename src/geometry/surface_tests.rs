@@ -167,7 +167,7 @@ fn dense(s: &Surface, m: usize) -> (Vec<[f64; 3]>, f64) {
             let (centre, a, n) = match &s.kind {
                 Kind::Sphere(x) => (x.centre, [x.radius; 3], 2.0),
                 Kind::Ellipsoid(x) => (x.centre, x.semi_axes, 2.0),
-                Kind::Superquadric(x) => (x.centre, x.a, x.n),
+                Kind::Superquadric(x) => (x.centre, x.gauge.a, x.gauge.n),
                 _ => unreachable!(),
             };
             for axis in 0..3 {
@@ -235,9 +235,9 @@ fn side(s: &Surface, p: [f64; 3]) -> Option<f64> {
         Kind::Superquadric(x) => {
             let v = sub(p, x.centre);
             (0..3)
-                .map(|k| (v[k] / x.a[k]).abs().powf(x.n))
+                .map(|k| (v[k] / x.gauge.a[k]).abs().powf(x.gauge.n))
                 .sum::<f64>()
-                .powf(1.0 / x.n)
+                .powf(1.0 / x.gauge.n)
                 - 1.0
         }
         Kind::Cylinder(x) => norm(x.split(p).1) - x.radius,
@@ -577,7 +577,7 @@ fn closest_point_is_stationary() {
                 // For n < 2 the curvature is unbounded on the coordinate
                 // planes; a closest point within ~(offset)² of one is
                 // located to ~1e-8 there, not to round-off.
-                let singular = matches!(&s.kind, Kind::Superquadric(x) if x.n < 2.0);
+                let singular = matches!(&s.kind, Kind::Superquadric(x) if x.gauge.n < 2.0);
                 let at_crease = singular && (0..3).any(|k| (q[k] - c[k]).abs() < 1e-6 * size);
                 prop_assert!(
                     at_end || at_crease || norm(tangential) <= 1e-10 * size,
