@@ -1,6 +1,6 @@
 //! Small vector arithmetic on fixed-size arrays, in any dimension and the
-//! few operations special to the plane and to space. The one-dimensional
-//! solvers are in [`crate::geometry::solvers`].
+//! few operations special to the plane and to space. (The one-dimensional
+//! solvers the shapes use are in `geometry/solvers.rs`.)
 
 /// Machine epsilon, used for root-finding and convergence tolerances.
 pub const EPS: f64 = f64::EPSILON;

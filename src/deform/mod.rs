@@ -712,4 +712,3 @@ impl From<DeformError> for StepFailure {
         StepFailure::Fatal(e)
     }
 }
-

@@ -233,7 +233,7 @@ impl ClosestPoint<2> for Shape {
         }
         match &self.kind {
             Kind::Line(s) => s.ray_hit(origin, dir),
-            Kind::Circle(s) => s.ray_hits(origin, dir).into_iter().flatten().next(),
+            Kind::Circle(s) => s.ray_hit(origin, dir),
             Kind::Arc(s) => s.ray_hit(origin, dir),
             Kind::Ellipse(s) => s.ray_hit(origin, dir),
             Kind::Superellipse(s) => s.ray_hit(origin, dir),

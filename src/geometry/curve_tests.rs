@@ -1,19 +1,14 @@
 use super::*;
 use crate::numeric::*;
-use crate::numeric::EPS;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, TestRunner};
+use super::super::test_support::runner;
 
 fn build(toml_text: &str) -> Shape {
     spec(toml_text).build().unwrap()
 }
 
 fn spec(toml_text: &str) -> ShapeSpec {
-    #[derive(Deserialize)]
-    struct Case {
-        shape: ShapeSpec,
-    }
-    toml::from_str::<Case>(toml_text).unwrap().shape
+    super::super::test_support::spec(toml_text)
 }
 
 /// Dense points along each test shape, for brute-force comparisons.
@@ -131,13 +126,6 @@ fn shapes() -> Vec<(&'static str, Shape, f64)> {
         .collect()
 }
 
-/// A property-test runner with a fixed seed: CI sees the same cases on
-/// every run (a failure is reproducible, never flaky).
-fn runner(cases: u32) -> TestRunner {
-    let config = Config { cases, failure_persistence: None, ..Config::default() };
-    let rng = proptest::test_runner::TestRng::deterministic_rng(config.rng_algorithm);
-    TestRunner::new_with_rng(config, rng)
-}
 
 // ---- specs and validation ------------------------------------------
 

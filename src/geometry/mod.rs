@@ -29,7 +29,7 @@ mod level_set;
 mod parametric;
 mod revolution;
 mod round;
-pub mod solvers;
+mod solvers;
 mod spline;
 mod superellipse;
 mod surface;
@@ -41,6 +41,25 @@ pub use surface::{Surface, SurfaceSpec};
 use crate::numeric::{norm, sub};
 use std::any::Any;
 use std::sync::Arc;
+
+#[cfg(test)]
+mod test_support {
+    use proptest::test_runner::{Config, TestRng, TestRunner};
+
+    /// The spec in a test's `shape = { ... }` line.
+    pub fn spec<S: serde::de::DeserializeOwned>(toml_text: &str) -> S {
+        let table: toml::Table = toml::from_str(toml_text).unwrap();
+        table["shape"].clone().try_into().unwrap()
+    }
+
+    /// A property-test runner with a fixed seed: CI sees the same cases on
+    /// every run (a failure is reproducible, never flaky).
+    pub fn runner(cases: u32) -> TestRunner {
+        let config = Config { cases, failure_persistence: None, ..Config::default() };
+        let rng = TestRng::deterministic_rng(config.rng_algorithm);
+        TestRunner::new_with_rng(config, rng)
+    }
+}
 
 /// A shape in `D` dimensions as the mesh needs it: `ClosestPoint<2>` for
 /// curves of the plane ([`Shape`], [`LevelSet`]), `ClosestPoint<3>` for

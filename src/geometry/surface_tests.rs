@@ -3,26 +3,14 @@ use crate::numeric::*;
 use super::super::round::orthonormal_basis;
 use std::f64::consts::TAU;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, TestRunner};
+use super::super::test_support::runner;
 
 fn spec(toml_text: &str) -> SurfaceSpec {
-    #[derive(Deserialize)]
-    struct Case {
-        shape: SurfaceSpec,
-    }
-    toml::from_str::<Case>(toml_text).unwrap().shape
+    super::super::test_support::spec(toml_text)
 }
 
 fn build(toml_text: &str) -> Surface {
     spec(toml_text).build().unwrap()
-}
-
-/// A property-test runner with a fixed seed: CI sees the same cases on
-/// every run (a failure is reproducible, never flaky).
-fn runner(cases: u32) -> TestRunner {
-    let config = Config { cases, failure_persistence: None, ..Config::default() };
-    let rng = proptest::test_runner::TestRng::deterministic_rng(config.rng_algorithm);
-    TestRunner::new_with_rng(config, rng)
 }
 
 /// The test surfaces, with a length scale and a reference "centre" each.
