@@ -1,7 +1,7 @@
 use super::*;
 use crate::numeric::*;
 use proptest::prelude::*;
-use super::super::test_support::runner;
+use super::super::test_support::{closest_against_brute, runner};
 
 fn build(toml_text: &str) -> Shape {
     spec(toml_text).build().unwrap()
@@ -48,12 +48,6 @@ fn max_spacing(pts: &[[f64; 2]]) -> f64 {
     pts.windows(2)
         .map(|w| norm(sub(w[1], w[0])))
         .fold(0.0, f64::max)
-}
-
-fn brute_distance(pts: &[[f64; 2]], p: [f64; 2]) -> f64 {
-    pts.iter()
-        .map(|q| norm(sub(*q, p)))
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// The test shapes, with a length scale each.
@@ -376,26 +370,9 @@ fn shape_is_send_and_sync() {
 
 // ---- closest points ------------------------------------------------
 
-/// The closest point must beat (or tie) every dense sample, and can be
-/// no closer than the true distance, which the samples over-estimate by
-/// at most one spacing.
-fn check_against_brute(
-    name: &str,
-    shape: &Shape,
-    pts: &[[f64; 2]],
-    spacing: f64,
-    size: f64,
-    p: [f64; 2],
-) {
-    let q = shape.closest_point(p);
-    let d = norm(sub(p, q));
-    let brute = brute_distance(pts, p);
-    assert!(
-        d <= brute + 1e-12 * size,
-        "{name} {p:?}: {d} vs brute {brute}"
-    );
-    assert!(d >= brute - spacing, "{name} {p:?}: {d} vs brute {brute}");
-    assert_eq!(shape.distance(p), d);
+/// The closest point against dense samples, and first-order optimal.
+fn check_against_brute(name: &str, shape: &Shape, pts: &[[f64; 2]], spacing: f64, size: f64, p: [f64; 2]) {
+    let q = closest_against_brute(name, shape, pts, spacing, 1e-12 * size, p);
     // First-order optimality to full precision: p − q is normal
     // (except at the end points of open curves).
     let n = shape.normal(p);

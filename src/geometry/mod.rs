@@ -44,6 +44,8 @@ use std::sync::Arc;
 
 #[cfg(test)]
 mod test_support {
+    use super::ClosestPoint;
+    use crate::numeric::{dist2, norm, sub};
     use proptest::test_runner::{Config, TestRng, TestRunner};
 
     /// The spec in a test's `shape = { ... }` line.
@@ -58,6 +60,21 @@ mod test_support {
         let config = Config { cases, failure_persistence: None, ..Config::default() };
         let rng = TestRng::deterministic_rng(config.rng_algorithm);
         TestRunner::new_with_rng(config, rng)
+    }
+
+    /// The closest point of `shape` to `p`, checked against dense samples
+    /// `pts` of the shape, at most `spacing` apart: it must beat (or tie,
+    /// within `tol`) every sample, can be no closer than the true distance,
+    /// which the samples over-estimate by at most one spacing, and
+    /// `distance` must agree with it.
+    pub fn closest_against_brute<const D: usize>(name: &str, shape: &dyn ClosestPoint<D>, pts: &[[f64; D]], spacing: f64, tol: f64, p: [f64; D]) -> [f64; D] {
+        let q = shape.closest_point(p);
+        let d = norm(sub(p, q));
+        let brute = pts.iter().map(|x| dist2(*x, p)).fold(f64::INFINITY, f64::min).sqrt();
+        assert!(d <= brute + tol, "{name} {p:?}: {d} vs brute {brute}");
+        assert!(d >= brute - spacing, "{name} {p:?}: {d} vs brute {brute}");
+        assert_eq!(shape.distance(p), d);
+        q
     }
 }
 

@@ -3,7 +3,7 @@ use crate::numeric::*;
 use super::super::round::orthonormal_basis;
 use std::f64::consts::TAU;
 use proptest::prelude::*;
-use super::super::test_support::runner;
+use super::super::test_support::{closest_against_brute, runner};
 
 fn spec(toml_text: &str) -> SurfaceSpec {
     super::super::test_support::spec(toml_text)
@@ -200,13 +200,6 @@ fn dense(s: &Surface, m: usize) -> (Vec<[f64; 3]>, f64) {
         }
     }
     (grids.into_iter().flatten().flatten().collect(), spacing)
-}
-
-fn brute_distance(pts: &[[f64; 3]], p: [f64; 3]) -> f64 {
-    pts.iter()
-        .map(|q| dist2(*q, p))
-        .fold(f64::INFINITY, f64::min)
-        .sqrt()
 }
 
 /// Signed side of `p` (negative inside / below / nearer the axis), from
@@ -482,23 +475,9 @@ fn surface_is_send_sync_clone_debug() {
 
 // ---- closest points ------------------------------------------------
 
-fn check_against_brute(
-    name: &str,
-    s: &Surface,
-    pts: &[[f64; 3]],
-    spacing: f64,
-    size: f64,
-    p: [f64; 3],
-) {
-    let q = s.closest_point(p);
-    let d = norm(sub(p, q));
-    let brute = brute_distance(pts, p);
-    assert!(
-        d <= brute + 1e-10 * size,
-        "{name} {p:?}: {d} vs brute {brute}"
-    );
-    assert!(d >= brute - spacing, "{name} {p:?}: {d} vs brute {brute}");
-    assert_eq!(s.distance(p), d);
+/// The closest point against dense samples, and on the surface.
+fn check_against_brute(name: &str, s: &Surface, pts: &[[f64; 3]], spacing: f64, size: f64, p: [f64; 3]) {
+    let q = closest_against_brute(name, s, pts, spacing, 1e-10 * size, p);
     // On the surface (to round-off).
     let on = side(s, q).unwrap_or(0.0);
     assert!(
