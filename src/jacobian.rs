@@ -10,6 +10,7 @@ use crate::expr::Expr;
 use crate::lsfem::{gauss_points, q1_eval, GAUSS};
 use crate::geometry::{ClosestPoint, LevelSet, Shape, Surface};
 use crate::mesh::{Point2, Point3, QuadMesh};
+use crate::numeric::{cross3, dot, scale};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -456,20 +457,47 @@ pub fn normalise<const D: usize, const N: usize>(
     Ok(Normalisation { t, c: inv_g / volume0, c_dot: (dt_term + flux) / volume0 })
 }
 
-/// The boundary-flux quadrature of a quad mesh (two Gauss points per
-/// edge): pairs (x, v·n ds) for nodal boundary velocities `velocity`.
-pub fn edge_flux_points<'a>(mesh: &'a QuadMesh, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
-    mesh.edges.iter().flat_map(move |e| {
-        let (a, b) = (nodes[e.nodes[0]], nodes[e.nodes[1]]);
-        let (va, vb) = (velocity[e.nodes[0]], velocity[e.nodes[1]]);
-        // outward normal times length: the domain is on the edge's left
-        let nds = [b[1] - a[1], -(b[0] - a[0])];
-        GAUSS.map(|s| {
-            let x = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
-            let v = [va[0] + s * (vb[0] - va[0]), va[1] + s * (vb[1] - va[1])];
-            (x, 0.5 * (v[0] * nds[0] + v[1] * nds[1]))
+/// The boundary-flux quadrature of a Q1 mesh: pairs (x, v·n dS) at the
+/// Gauss points (2 per direction) of every boundary facet `[usize; K]`, for
+/// nodal boundary velocities `velocity`. A facet is an edge in 2D (K = 2,
+/// the domain on its left) or a bilinear face in 3D (K = 4, its nodes
+/// counter-clockwise seen from outside), so that n points outward.
+pub fn facet_flux_points<'a, const D: usize, const K: usize>(
+    facets: impl Iterator<Item = [usize; K]> + 'a,
+    nodes: &'a [[f64; D]],
+    velocity: &'a [[f64; D]],
+) -> impl Iterator<Item = ([f64; D], f64)> + 'a {
+    facets.flat_map(move |f| {
+        let (p, w) = (f.map(|n| nodes[n]), f.map(|n| velocity[n]));
+        (0..K).map(move |k| {
+            // the facet's shape functions at Gauss point k (an edge: η = 0)
+            let (xi, eta) = (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 });
+            let n = [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta];
+            let at = |q: &[[f64; D]; K]| -> [f64; D] { std::array::from_fn(|i| (0..K).map(|a| n[a] * q[a][i]).sum()) };
+            (at(&p), dot(at(&w), weighted_normal(&p, xi, eta)))
         })
     })
+}
+
+/// n dS at (ξ, η) of a facet times its Gauss weight (1/2 on an edge, 1/4
+/// on a face): the tangent turned clockwise, or ∂x/∂ξ × ∂x/∂η.
+fn weighted_normal<const D: usize, const K: usize>(p: &[[f64; D]; K], xi: f64, eta: f64) -> [f64; D] {
+    let mut n = [0.0; D];
+    match (&p[..], &mut n[..]) {
+        ([a, b], [n0, n1]) => (*n0, *n1) = (0.5 * (b[1] - a[1]), 0.5 * -(b[0] - a[0])),
+        ([p0, p1, p2, p3], [_, _, _]) => {
+            let dxi: [f64; 3] = std::array::from_fn(|i| (1.0 - eta) * (p1[i] - p0[i]) + eta * (p2[i] - p3[i]));
+            let deta: [f64; 3] = std::array::from_fn(|i| (1.0 - xi) * (p3[i] - p0[i]) + xi * (p2[i] - p1[i]));
+            n.copy_from_slice(&scale(0.25, cross3(dxi, deta)));
+        }
+        _ => {} // no other facets: the flux through them is not counted
+    }
+    n
+}
+
+/// [`facet_flux_points`] over the boundary edges of a quad mesh.
+pub fn edge_flux_points<'a>(mesh: &'a QuadMesh, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
+    facet_flux_points(mesh.edges.iter().map(|e| e.nodes), nodes, velocity)
 }
 
 #[cfg(test)]
