@@ -15,10 +15,9 @@
 //! Groups of the mesh that the file does not name stay as they are.
 
 use crate::case::CaseError;
-use crate::deform::{BoundaryPart, BoundaryShape, Correspondence, MoveMode, PartKind};
+use crate::deform::{BoundaryPart, Correspondence, MoveMode, PartKind};
 use crate::expr::Expr;
-use crate::geometry::ShapeSpec;
-use crate::geometry3::SurfaceSpec;
+use crate::geometry::{shape_from_toml, ClosestPoint, LevelSet};
 use crate::jacobian::EXPR_VARS;
 use serde::Deserialize;
 use std::path::Path;
@@ -68,104 +67,6 @@ pub struct GroupSpec {
     /// Or a level set φ(x, y, z) = 0.
     #[serde(default)]
     pub level_set: Option<String>,
-}
-
-/// The zero set of φ as a boundary shape: projection by Newton's method,
-/// `x ← x − φ ∇φ / |∇φ|²`, from the point itself (a foot point on the
-/// surface near it: for points close to the surface, as mesh nodes are,
-/// the closest one to first order).
-#[derive(Clone, Debug)]
-pub struct LevelSet {
-    phi: Expr,
-}
-
-impl LevelSet {
-    /// φ from an expression in x, y, z.
-    pub fn new(phi: Expr) -> Result<LevelSet, String> {
-        if phi.uses("t") {
-            return Err("a level set may not use t".into());
-        }
-        Ok(LevelSet { phi })
-    }
-
-    fn eval<const D: usize>(&self, x: [f64; D]) -> f64 {
-        let mut v = [0.0; 4];
-        v[..D].copy_from_slice(&x);
-        self.phi.eval(&v)
-    }
-
-    fn grad<const D: usize>(&self, x: [f64; D]) -> [f64; D] {
-        let h = 1e-7 * (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-        std::array::from_fn(|k| {
-            let (mut a, mut b) = (x, x);
-            a[k] += h;
-            b[k] -= h;
-            (self.eval(a) - self.eval(b)) / (2.0 * h)
-        })
-    }
-
-    fn project<const D: usize>(&self, x: [f64; D]) -> [f64; D] {
-        let mut p = x;
-        for _ in 0..50 {
-            let (v, g) = (self.eval(p), self.grad(p));
-            let n2: f64 = g.iter().map(|c| c * c).sum();
-            if !(n2 > 0.0) || !v.is_finite() {
-                break;
-            }
-            let step: [f64; D] = std::array::from_fn(|k| v * g[k] / n2);
-            p = std::array::from_fn(|k| p[k] - step[k]);
-            if step.iter().map(|c| c * c).sum::<f64>().sqrt() <= 1e-15 * (1.0 + p.iter().map(|c| c * c).sum::<f64>().sqrt()) {
-                break;
-            }
-        }
-        p
-    }
-}
-
-impl<const D: usize> BoundaryShape<D> for LevelSet {
-    fn closest_point(&self, p: [f64; D]) -> [f64; D] {
-        self.project(p)
-    }
-    fn distance(&self, p: [f64; D]) -> f64 {
-        let q = self.project(p);
-        (0..D).map(|k| (q[k] - p[k]).powi(2)).sum::<f64>().sqrt()
-    }
-    fn normal(&self, p: [f64; D]) -> [f64; D] {
-        let g = self.grad(self.project(p));
-        let l = g.iter().map(|c| c * c).sum::<f64>().sqrt();
-        g.map(|c| c / l)
-    }
-    fn ray_hit(&self, origin: [f64; D], dir: [f64; D]) -> Option<[f64; D]> {
-        // bracket the first sign change of φ along the ray on a doubling
-        // grid (the gradient may vanish at the origin, a centre), then bisect
-        let at = |s: f64| -> [f64; D] { std::array::from_fn(|k| origin[k] + s * dir[k]) };
-        let f0 = self.eval(origin);
-        let (mut lo, mut hi) = (0.0, f64::NAN);
-        let mut s = 1e-6;
-        for _ in 0..70 {
-            let v = self.eval(at(s));
-            if v == 0.0 {
-                return Some(at(s));
-            }
-            if v.signum() != f0.signum() {
-                hi = s;
-                break;
-            }
-            lo = s;
-            s *= 2.0;
-        }
-        if hi.is_nan() {
-            return None;
-        }
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if self.eval(at(mid)).signum() == f0.signum() { lo = mid } else { hi = mid }
-        }
-        Some(at(0.5 * (lo + hi)))
-    }
 }
 
 impl GeometryFile {
@@ -256,7 +157,7 @@ pub fn carried(parts: impl Iterator<Item = usize>, count: usize) -> Vec<bool> {
 }
 
 /// The shape of a group: a curve or surface spec, or a level set.
-fn shape_of<const D: usize>(g: &GroupSpec) -> Result<Option<Arc<dyn BoundaryShape<D>>>, String> {
+fn shape_of<const D: usize>(g: &GroupSpec) -> Result<Option<Arc<dyn ClosestPoint<D>>>, String> {
     match (&g.shape, &g.level_set) {
         (Some(_), Some(_)) => Err("give `shape` or `level_set`, not both".into()),
         (None, None) => Ok(None),
@@ -264,69 +165,13 @@ fn shape_of<const D: usize>(g: &GroupSpec) -> Result<Option<Arc<dyn BoundaryShap
             let e = Expr::parse(text, &EXPR_VARS).map_err(|e| format!("field `level_set`: {e}"))?;
             Ok(Some(Arc::new(LevelSet::new(e)?)))
         }
-        (Some(v), None) => {
-            let v = v.get_ref().clone();
-            if D == 2 {
-                let spec: ShapeSpec = v.try_into().map_err(|e: toml::de::Error| format!("field `shape`: {}", e.to_string().trim_end()))?;
-                let s = spec.build().map_err(|e| format!("field `shape`: {e}"))?;
-                Ok(Some(cast::<D, 2>(Arc::new(s))))
-            } else {
-                let spec: SurfaceSpec = v.try_into().map_err(|e: toml::de::Error| format!("field `shape`: {}", e.to_string().trim_end()))?;
-                let s = spec.build().map_err(|e| format!("field `shape`: {e}"))?;
-                Ok(Some(cast::<D, 3>(Arc::new(s))))
-            }
-        }
-    }
-}
-
-/// A shape of dimension E as one of dimension D, where D == E is checked
-/// by the caller: the const generics cannot see it.
-fn cast<const D: usize, const E: usize>(s: Arc<dyn BoundaryShape<E>>) -> Arc<dyn BoundaryShape<D>> {
-    assert_eq!(D, E, "dimension checked by the caller");
-    Arc::new(SameDim::<E> { inner: s })
-}
-
-/// Adapts `[f64; E]` to `[f64; D]` for D == E.
-#[derive(Debug)]
-struct SameDim<const E: usize> {
-    inner: Arc<dyn BoundaryShape<E>>,
-}
-
-fn conv<const A: usize, const B: usize>(x: [f64; A]) -> [f64; B] {
-    std::array::from_fn(|i| x[i])
-}
-
-impl<const D: usize, const E: usize> BoundaryShape<D> for SameDim<E> {
-    fn closest_point(&self, p: [f64; D]) -> [f64; D] {
-        conv(self.inner.closest_point(conv(p)))
-    }
-    fn distance(&self, p: [f64; D]) -> f64 {
-        self.inner.distance(conv(p))
-    }
-    fn normal(&self, p: [f64; D]) -> [f64; D] {
-        conv(self.inner.normal(conv(p)))
-    }
-    fn ray_hit(&self, origin: [f64; D], dir: [f64; D]) -> Option<[f64; D]> {
-        self.inner.ray_hit(conv(origin), conv(dir)).map(conv)
+        (Some(v), None) => shape_from_toml::<D>(v.get_ref()).map(Some),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn level_set_projects_onto_a_circle_and_hits_it() {
-        let ls = LevelSet::new(Expr::parse("x^2 + y^2 - 0.25", &EXPR_VARS).unwrap()).unwrap();
-        for p in [[0.6, 0.1], [0.3, -0.2], [-0.51, 0.0]] {
-            let q = BoundaryShape::<2>::closest_point(&ls, p);
-            assert!((q[0].hypot(q[1]) - 0.5).abs() < 1e-14, "{q:?}");
-            // Newton's foot point lies on the ray through the centre here
-            assert!((q[1] * p[0] - q[0] * p[1]).abs() < 1e-8);
-        }
-        let hit = BoundaryShape::<2>::ray_hit(&ls, [0.0, 0.0], [1.0, 1.0]).unwrap();
-        assert!((hit[0] - 0.5 / 2f64.sqrt()).abs() < 1e-12);
-    }
 
     #[test]
     fn groups_bind_by_name_and_unknown_names_are_errors() {

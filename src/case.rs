@@ -4,17 +4,15 @@
 //! Every table rejects unknown fields, and every error names the file and
 //! the field (toml's own errors add the line and column).
 
-use crate::deform::{BoundaryPart, BoundaryShape, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
+use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
 use crate::expr::Expr;
-use crate::geometry::ShapeSpec;
+use crate::geometry::{shape_from_toml, spec_from_toml, LevelSet, ShapeSpec, SurfaceSpec};
 use crate::highorder::curve::CurveOptions;
 use crate::highorder::{check_order, Spacing};
-use crate::geometry3::SurfaceSpec;
 use crate::jacobian::{lift, ImageField, JacobianError, Interface, JacobianField, Locus, SmallWhere, Target, TimePath, EXPR_VARS};
 use crate::mesh::{HexMesh, QuadMesh, BOX_FACES, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// A case file that cannot be used.
 #[derive(Debug, thiserror::Error)]
@@ -243,15 +241,12 @@ impl FieldSpec {
             FieldSpec::Interface { shape, level_set, width, size_ratio, jacobian_ratio: jr } => {
                 let r = jacobian_ratio(*size_ratio, *jr, dim, &format!("field `{here}`"))?;
                 let locus = match (shape, level_set) {
-                    (Some(v), None) if dim == 2 => {
-                        let spec: ShapeSpec = v.clone().try_into().map_err(|e| format!("field `{here}.shape`: {}", e.to_string().trim_end()))?;
-                        Locus::Curve(spec.build().map_err(|e| format!("field `{here}.shape`: {e}"))?)
+                    (Some(v), None) if dim == 2 => Locus::Curve(spec_from_toml(v, &format!("{here}.shape"), ShapeSpec::build)?),
+                    (Some(v), None) => Locus::Surface(spec_from_toml(v, &format!("{here}.shape"), SurfaceSpec::build)?),
+                    (None, Some(text)) => {
+                        let phi = Expr::parse(text, &EXPR_VARS).map_err(|e| format!("field `{here}.level_set`: {e}"))?;
+                        Locus::LevelSet(LevelSet::new(phi).map_err(|e| format!("field `{here}.level_set`: {e}"))?)
                     }
-                    (Some(v), None) => {
-                        let spec: SurfaceSpec = v.clone().try_into().map_err(|e| format!("field `{here}.shape`: {}", e.to_string().trim_end()))?;
-                        Locus::Surface(spec.build().map_err(|e| format!("field `{here}.shape`: {e}"))?)
-                    }
-                    (None, Some(text)) => Locus::LevelSet(Expr::parse(text, &EXPR_VARS).map_err(|e| format!("field `{here}.level_set`: {e}"))?),
                     _ => return Err(format!("field `{here}`: an interface needs exactly one of `shape` and `level_set`")),
                 };
                 Target::Interface(Interface::new(locus, *width, r).map_err(|e| format!("field `{here}`: {e}"))?)
@@ -548,7 +543,7 @@ impl Case {
         };
         if dim == 2 {
             let mut mesh = QuadMesh::structured_box([m.lower[0], m.lower[1]], [m.upper[0], m.upper[1]], m.cells[0], m.cells[1]);
-            let (parts, side_part) = self.parts(file, &BOX_SIDES, build_curve)?;
+            let (parts, side_part) = self.parts(file, &BOX_SIDES)?;
             // re-tag the box's side indices with part indices
             mesh.edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
             mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
@@ -557,7 +552,7 @@ impl Case {
             Ok(AnySetup::Quad(Setup { name, mesh, parts, field, options, output, highorder }))
         } else {
             let mut mesh = HexMesh::structured_box([m.lower[0], m.lower[1], m.lower[2]], [m.upper[0], m.upper[1], m.upper[2]], [m.cells[0], m.cells[1], m.cells[2]]);
-            let (parts, face_part) = self.parts(file, &BOX_FACES, build_surface)?;
+            let (parts, face_part) = self.parts(file, &BOX_FACES)?;
             mesh.faces.iter_mut().for_each(|f| f.part = face_part[f.part]);
             mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
             let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
@@ -571,7 +566,6 @@ impl Case {
         &self,
         file: &str,
         sides: &[&str],
-        build: fn(&toml::Value) -> Result<Arc<dyn BoundaryShape<D>>, String>,
     ) -> Result<(Vec<BoundaryPart<D>>, Vec<usize>), CaseError> {
         let err = |message: String| CaseError { file: file.to_string(), message };
         let mut side_part = vec![usize::MAX; sides.len()];
@@ -598,7 +592,7 @@ impl Case {
                 side_part[s] = parts.len();
             }
             let line = spec.shape.as_ref().map_or(String::new(), |v| self.line_of(v.span().start));
-            let kind = part_kind(spec, build).map_err(|m| err(format!("{line}{here}: {m}")))?;
+            let kind = part_kind(spec).map_err(|m| err(format!("{line}{here}: {m}")))?;
             parts.push(BoundaryPart { name: spec.name.clone(), kind });
         }
         // sides nobody named stay slip walls under their own name
@@ -641,22 +635,10 @@ fn centroid<const D: usize, const N: usize>(p: &[[f64; D]; N]) -> [f64; D] {
     std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / N as f64)
 }
 
-/// A 2D curve from a case's `shape` table.
-fn build_curve(v: &toml::Value) -> Result<Arc<dyn BoundaryShape<2>>, String> {
-    let spec: ShapeSpec = v.clone().try_into().map_err(|e| format!("field `shape`: {}", e.to_string().trim_end()))?;
-    Ok(Arc::new(spec.build().map_err(|e| format!("field `shape`: {e}"))?))
-}
-
-/// A 3D surface from a case's `shape` table.
-fn build_surface(v: &toml::Value) -> Result<Arc<dyn BoundaryShape<3>>, String> {
-    let spec: SurfaceSpec = v.clone().try_into().map_err(|e| format!("field `shape`: {}", e.to_string().trim_end()))?;
-    Ok(Arc::new(spec.build().map_err(|e| format!("field `shape`: {e}"))?))
-}
-
 /// Translates one part's spec into its kind, checking the fields that
 /// belong together.
-fn part_kind<const D: usize>(spec: &PartSpec, build: fn(&toml::Value) -> Result<Arc<dyn BoundaryShape<D>>, String>) -> Result<PartKind<D>, String> {
-    let shape = spec.shape.as_ref().map(|v| build(v.get_ref())).transpose()?;
+fn part_kind<const D: usize>(spec: &PartSpec) -> Result<PartKind<D>, String> {
+    let shape = spec.shape.as_ref().map(|v| shape_from_toml::<D>(v.get_ref())).transpose()?;
     let move_only = spec.correspondence.is_some() || spec.centre.is_some() || spec.direction.is_some() || spec.mode.is_some();
     match spec.kind {
         PartKindSpec::Slip | PartKindSpec::Fixed if move_only => {

@@ -8,9 +8,9 @@
 
 use crate::expr::Expr;
 use crate::lsfem::{gauss_points, q1_eval, GAUSS};
-use crate::geometry::Shape;
-use crate::geometry3::Surface;
+use crate::geometry::{ClosestPoint, LevelSet, Shape, Surface};
 use crate::mesh::{Point2, Point3, QuadMesh};
+use crate::numeric::{cross3, dot, scale};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -190,70 +190,21 @@ pub enum Locus {
     Curve(Shape),
     /// A surface of the geometry module.
     Surface(Surface),
-    /// φ(x, y, z) = 0 (variables [`EXPR_VARS`]; t must not occur).
-    LevelSet(Expr),
+    /// φ(x, y, z) = 0.
+    LevelSet(LevelSet),
 }
 
 impl Locus {
-    /// Distance from x to the interface (z ignored for curves).
-    pub fn distance(&self, x: Point3) -> f64 {
+    /// Distance from x to the interface (z ignored for curves); for a
+    /// level set, its first-order estimate where that exceeds `far` (see
+    /// [`LevelSet::band_distance`]).
+    pub fn distance(&self, x: Point3, far: f64) -> f64 {
         match self {
             Locus::Curve(s) => s.distance([x[0], x[1]]),
             Locus::Surface(s) => s.distance(x),
-            Locus::LevelSet(phi) => level_set_distance(phi, x, f64::INFINITY),
+            Locus::LevelSet(s) => s.band_distance(x, far),
         }
     }
-}
-
-/// Distance to {φ = 0}: Newton's projection `x ← x − φ ∇φ/|∇φ|²` from x,
-/// then the length travelled. Where that does not converge (a critical
-/// point of φ, say), the first-order estimate |φ|/|∇φ| stands in, which
-/// is what the band needs far from the interface anyway. Where that
-/// estimate exceeds `far`, it is returned without projecting: an interface
-/// band has vanished there, and the projection is the costly part.
-pub fn level_set_distance(phi: &Expr, x: Point3, far: f64) -> f64 {
-    let eval = |p: Point3| phi.eval(&[p[0], p[1], p[2], 1.0]);
-    let grad = |p: Point3| -> Point3 {
-        let h = 1e-6 * (1.0 + p.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-        std::array::from_fn(|k| {
-            let (mut a, mut b) = (p, p);
-            a[k] += h;
-            b[k] -= h;
-            (eval(a) - eval(b)) / (2.0 * h)
-        })
-    };
-    let norm2 = |g: Point3| g.iter().map(|v| v * v).sum::<f64>();
-    let v0 = eval(x);
-    let g0 = norm2(grad(x));
-    if v0 == 0.0 {
-        return 0.0;
-    }
-    if !v0.is_finite() {
-        // φ undefined here: a NaN g₁, reported, rather than a band that is
-        // silently absent
-        return f64::NAN;
-    }
-    let first_order = if g0 > 0.0 { v0.abs() / g0.sqrt() } else { f64::INFINITY };
-    if first_order > far {
-        return first_order;
-    }
-    let mut p = x;
-    for _ in 0..30 {
-        let (v, g) = (eval(p), grad(p));
-        let n2 = norm2(g);
-        if !(n2 > 0.0) || !v.is_finite() {
-            return first_order;
-        }
-        let step: Point3 = std::array::from_fn(|k| v * g[k] / n2);
-        p = std::array::from_fn(|k| p[k] - step[k]);
-        if norm2(step).sqrt() <= 1e-13 * (1.0 + norm2(p).sqrt()) {
-            let d = norm2(std::array::from_fn(|k| p[k] - x[k])).sqrt();
-            // Newton can land on a far branch: never report more than the
-            // first-order estimate allows by a wide margin
-            return if d.is_finite() { d.min(4.0 * first_order) } else { first_order };
-        }
-    }
-    first_order
 }
 
 /// Cells crowd along an interface: g₁ = 1 − (1 − r) exp(−(d/w)²), with d
@@ -276,21 +227,13 @@ impl Interface {
             return Err(JacobianError::Parameter(format!("interface width must be a positive number, got {width}")));
         }
         check_ratio("interface jacobian ratio", jacobian_ratio)?;
-        if let Locus::LevelSet(e) = &locus {
-            if e.uses("t") {
-                return Err(JacobianError::Parameter("an interface level set may not use t".into()));
-            }
-        }
         Ok(Interface { locus, width, jacobian_ratio })
     }
 
     /// g₁ at x.
     pub fn value(&self, x: Point3) -> f64 {
-        let d = match &self.locus {
-            // beyond 8 widths exp(−64) leaves g₁ = 1 to the last bit
-            Locus::LevelSet(phi) => level_set_distance(phi, x, 8.0 * self.width),
-            other => other.distance(x),
-        } / self.width;
+        // beyond 8 widths exp(−64) leaves g₁ = 1 to the last bit
+        let d = self.locus.distance(x, 8.0 * self.width) / self.width;
         1.0 - (1.0 - self.jacobian_ratio) * (-d * d).exp()
     }
 }
@@ -514,20 +457,47 @@ pub fn normalise<const D: usize, const N: usize>(
     Ok(Normalisation { t, c: inv_g / volume0, c_dot: (dt_term + flux) / volume0 })
 }
 
-/// The boundary-flux quadrature of a quad mesh (two Gauss points per
-/// edge): pairs (x, v·n ds) for nodal boundary velocities `velocity`.
-pub fn edge_flux_points<'a>(mesh: &'a QuadMesh, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
-    mesh.edges.iter().flat_map(move |e| {
-        let (a, b) = (nodes[e.nodes[0]], nodes[e.nodes[1]]);
-        let (va, vb) = (velocity[e.nodes[0]], velocity[e.nodes[1]]);
-        // outward normal times length: the domain is on the edge's left
-        let nds = [b[1] - a[1], -(b[0] - a[0])];
-        GAUSS.map(|s| {
-            let x = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
-            let v = [va[0] + s * (vb[0] - va[0]), va[1] + s * (vb[1] - va[1])];
-            (x, 0.5 * (v[0] * nds[0] + v[1] * nds[1]))
+/// The boundary-flux quadrature of a Q1 mesh: pairs (x, v·n dS) at the
+/// Gauss points (2 per direction) of every boundary facet `[usize; K]`, for
+/// nodal boundary velocities `velocity`. A facet is an edge in 2D (K = 2,
+/// the domain on its left) or a bilinear face in 3D (K = 4, its nodes
+/// counter-clockwise seen from outside), so that n points outward.
+pub fn facet_flux_points<'a, const D: usize, const K: usize>(
+    facets: impl Iterator<Item = [usize; K]> + 'a,
+    nodes: &'a [[f64; D]],
+    velocity: &'a [[f64; D]],
+) -> impl Iterator<Item = ([f64; D], f64)> + 'a {
+    facets.flat_map(move |f| {
+        let (p, w) = (f.map(|n| nodes[n]), f.map(|n| velocity[n]));
+        (0..K).map(move |k| {
+            // the facet's shape functions at Gauss point k (an edge: η = 0)
+            let (xi, eta) = (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 });
+            let n = [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta];
+            let at = |q: &[[f64; D]; K]| -> [f64; D] { std::array::from_fn(|i| (0..K).map(|a| n[a] * q[a][i]).sum()) };
+            (at(&p), dot(at(&w), weighted_normal(&p, xi, eta)))
         })
     })
+}
+
+/// n dS at (ξ, η) of a facet times its Gauss weight (1/2 on an edge, 1/4
+/// on a face): the tangent turned clockwise, or ∂x/∂ξ × ∂x/∂η.
+fn weighted_normal<const D: usize, const K: usize>(p: &[[f64; D]; K], xi: f64, eta: f64) -> [f64; D] {
+    let mut n = [0.0; D];
+    match (&p[..], &mut n[..]) {
+        ([a, b], [n0, n1]) => (*n0, *n1) = (0.5 * (b[1] - a[1]), 0.5 * -(b[0] - a[0])),
+        ([p0, p1, p2, p3], [_, _, _]) => {
+            let dxi: [f64; 3] = std::array::from_fn(|i| (1.0 - eta) * (p1[i] - p0[i]) + eta * (p2[i] - p3[i]));
+            let deta: [f64; 3] = std::array::from_fn(|i| (1.0 - xi) * (p3[i] - p0[i]) + xi * (p2[i] - p1[i]));
+            n.copy_from_slice(&scale(0.25, cross3(dxi, deta)));
+        }
+        _ => {} // no other facets: the flux through them is not counted
+    }
+    n
+}
+
+/// [`facet_flux_points`] over the boundary edges of a quad mesh.
+pub fn edge_flux_points<'a>(mesh: &'a QuadMesh, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
+    facet_flux_points(mesh.edges.iter().map(|e| e.nodes), nodes, velocity)
 }
 
 #[cfg(test)]
@@ -618,22 +588,6 @@ mod tests {
     }
 
     #[test]
-    fn level_set_distance_is_exact_for_a_circle_and_capped_far_away() {
-        let phi = expr("(x - 0.5)^2 + (y - 0.5)^2 - 0.09");
-        for p in [[0.5, 0.9, 0.0], [0.1, 0.2, 0.0], [0.55, 0.52, 0.0], [0.8, 0.5, 0.0]] {
-            let exact = ((p[0] - 0.5f64).hypot(p[1] - 0.5) - 0.3).abs();
-            let d = level_set_distance(&phi, p, f64::INFINITY);
-            assert!((d - exact).abs() < 1e-9, "{p:?}: {d} vs {exact}");
-        }
-        // beyond `far` the first-order estimate |φ|/|∇φ| comes back
-        let p = [3.0, 0.5, 0.0];
-        let fo = (2.5f64 * 2.5 - 0.09) / 5.0;
-        assert!((level_set_distance(&phi, p, 1.0) - fo).abs() < 1e-6);
-        // at the centre ∇φ = 0: no projection, no NaN
-        assert!(level_set_distance(&phi, [0.5, 0.5, 0.0], f64::INFINITY).is_infinite());
-    }
-
-    #[test]
     fn interface_profile_min_product_and_floor() {
         let circle = crate::geometry::ShapeSpec::Circle { centre: [0.0, 0.0], radius: 1.0 }.build().unwrap();
         let band = Interface::new(Locus::Curve(circle), 0.1, 0.2).unwrap();
@@ -663,7 +617,6 @@ mod tests {
             let e = Interface::new(circle(), w, r).unwrap_err().to_string();
             assert!(e.contains("must be a positive number"), "{e}");
         }
-        assert!(Interface::new(Locus::LevelSet(expr("x - t")), 0.1, 0.5).unwrap_err().to_string().contains("may not use t"));
     }
 
     #[test]

@@ -25,6 +25,8 @@ mod patches;
 pub mod refine;
 pub mod strain;
 
+/// A target or wall shape in D dimensions (see [`crate::geometry::ClosestPoint`]).
+pub use crate::geometry::ClosestPoint as BoundaryShape;
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
 use crate::solve::{Amg, CholeskySolver, ConjugateGradient, Jacobi, LaggedCholesky, SolveError, SpdSolver};
@@ -33,33 +35,6 @@ use std::time::{Duration, Instant};
 
 pub use chains::Chains;
 pub use patches::Patches;
-
-/// A target or wall shape in D dimensions, as the boundary models need it.
-pub trait BoundaryShape<const D: usize>: Send + Sync + std::fmt::Debug {
-    /// The closest point of the shape.
-    fn closest_point(&self, p: [f64; D]) -> [f64; D];
-    /// Distance to the shape.
-    fn distance(&self, p: [f64; D]) -> f64;
-    /// Unit outward normal at the closest point.
-    fn normal(&self, p: [f64; D]) -> [f64; D];
-    /// First intersection of the ray `origin + s dir`, s > 0.
-    fn ray_hit(&self, origin: [f64; D], dir: [f64; D]) -> Option<[f64; D]>;
-}
-
-impl BoundaryShape<2> for crate::geometry::Shape {
-    fn closest_point(&self, p: [f64; 2]) -> [f64; 2] {
-        crate::geometry::Shape::closest_point(self, p)
-    }
-    fn distance(&self, p: [f64; 2]) -> f64 {
-        crate::geometry::Shape::distance(self, p)
-    }
-    fn normal(&self, p: [f64; 2]) -> [f64; 2] {
-        crate::geometry::Shape::normal(self, p)
-    }
-    fn ray_hit(&self, origin: [f64; 2], dir: [f64; 2]) -> Option<[f64; 2]> {
-        crate::geometry::Shape::ray_hit(self, origin, dir)
-    }
-}
 
 /// How a point of the starting boundary finds its place on the target.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -816,21 +791,5 @@ impl StepFailure {
 impl From<DeformError> for StepFailure {
     fn from(e: DeformError) -> Self {
         StepFailure::Fatal(e)
-    }
-}
-
-
-impl BoundaryShape<3> for crate::geometry3::Surface {
-    fn closest_point(&self, p: [f64; 3]) -> [f64; 3] {
-        crate::geometry3::Surface::closest_point(self, p)
-    }
-    fn distance(&self, p: [f64; 3]) -> f64 {
-        crate::geometry3::Surface::distance(self, p)
-    }
-    fn normal(&self, p: [f64; 3]) -> [f64; 3] {
-        crate::geometry3::Surface::normal(self, p)
-    }
-    fn ray_hit(&self, origin: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
-        crate::geometry3::Surface::ray_hit(self, origin, dir)
     }
 }

@@ -18,7 +18,8 @@
 
 use super::{BoundaryModel, BoundaryPart, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::hexquality::{hex_volume, invalid_hex_cells};
-use crate::lsfem::{Constraint, GAUSS};
+use crate::jacobian::facet_flux_points;
+use crate::lsfem::Constraint;
 use crate::mesh::{HexMesh, Point3};
 use crate::numeric::{cross3 as cross, dot, sub, unit};
 use std::collections::HashMap;
@@ -395,20 +396,7 @@ impl Q1Mesh<3, 8> for HexMesh {
     }
 
     fn flux_points<'a>(&'a self, nodes: &'a [Point3], v: &'a [Point3]) -> impl Iterator<Item = (Point3, f64)> + 'a {
-        self.faces.iter().flat_map(move |f| {
-            let p = f.nodes.map(|n| nodes[n]);
-            let w = f.nodes.map(|n| v[n]);
-            // bilinear face, 2×2 Gauss; the nodes run counter-clockwise
-            // seen from outside, so ∂x/∂ξ × ∂x/∂η points outward
-            (0..4).map(move |k| {
-                let (xi, eta) = (GAUSS[k & 1], GAUSS[k >> 1]);
-                let n = [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta];
-                let at = |q: &[Point3; 4]| -> Point3 { std::array::from_fn(|i| (0..4).map(|a| n[a] * q[a][i]).sum()) };
-                let dxi: Point3 = std::array::from_fn(|i| (1.0 - eta) * (p[1][i] - p[0][i]) + eta * (p[2][i] - p[3][i]));
-                let deta: Point3 = std::array::from_fn(|i| (1.0 - xi) * (p[3][i] - p[0][i]) + xi * (p[2][i] - p[1][i]));
-                (at(&p), 0.25 * dot(at(&w), cross(dxi, deta)))
-            })
-        })
+        facet_flux_points(self.faces.iter().map(|f| f.nodes), nodes, v)
     }
 
     fn invalid_cells(&self, nodes: &[Point3]) -> Vec<usize> {

@@ -944,7 +944,7 @@ mod tests {
     /// naming both groups; with one sphere (bound twice) accepted.
     #[test]
     fn two_curved_groups_meeting_along_an_edge() {
-        use crate::geometry3::SurfaceSpec;
+        use crate::geometry::SurfaceSpec;
         use std::sync::Arc;
         let mesh = HexMesh::structured_box([0.0; 3], [1.0; 3], [2, 2, 2]);
         let sphere = |centre: [f64; 3], radius: f64| -> Arc<dyn crate::deform::BoundaryShape<3>> { Arc::new(SurfaceSpec::Sphere { centre, radius }.build().unwrap()) };
