@@ -699,10 +699,6 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     let dir = job.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
     let min_det: Vec<f64> = c.certificates.iter().map(|x| x.min_det_lower).collect();
     let sj: Vec<f64> = c.certificates.iter().map(|x| x.min_scaled_jacobian).collect();
-    let mut files: Vec<(String, Vec<u8>)> = vec![
-        (format!("{stem}.msh"), c.mesh.msh_string()?.into_bytes()),
-        (format!("{stem}.vtu"), c.mesh.vtu_string(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])?.into_bytes()),
-    ];
     let output = OutputSpec::default();
     let bounds = frame_bounds(std::iter::once(c.mesh.nodes.as_slice()));
     let r = Range::of(sj.iter().copied());
@@ -715,7 +711,13 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         colour_map: Some(ColourMap::Sequential),
         output: &output,
     };
-    files.push((format!("{stem}.png"), png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?));
+    // the three outputs are independent and each mostly serial: side by side
+    let ((msh, vtu), png) = rayon::join(
+        || rayon::join(|| c.mesh.msh_string(), || c.mesh.vtu_string(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])),
+        || -> Result<Vec<u8>, RunError> { Ok(png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?) },
+    );
+    let mut files: Vec<(String, Vec<u8>)> =
+        vec![(format!("{stem}.msh"), msh?.into_bytes()), (format!("{stem}.vtu"), vtu?.into_bytes()), (format!("{stem}.png"), png?)];
     let mut report = CurveReport {
         input: job.input.display().to_string(),
         dimension: D,
