@@ -214,29 +214,10 @@ impl Amg {
         }
     }
 
-    /// Factors the coarsest operator. Pᵀ A P is positive definite, but
-    /// the coarsest of several levels can lose that to rounding (measured:
-    /// 954 unknowns under 3.9M of a p = 3 ball with 49k hexes): then its
-    /// diagonal is raised by 1e-12, 1e-10, … 1e-8 of itself until it
-    /// factors. It only preconditions, so CG still solves the true system.
+    /// Factors the coarsest operator (scalar structure: it is small).
     fn factor_coarse(&mut self) -> Result<(), SolveError> {
         let (ptr, null) = super::scalar_structure(0);
-        let structure = Structure { node_ptr: &ptr, near_null: &null, count: 0 };
-        let err = match self.coarse.factor(&self.coarse_a, structure) {
-            Err(SolveError::NotPositiveDefinite) => SolveError::NotPositiveDefinite,
-            done => return done,
-        };
-        let mut shifted = self.coarse_a.clone();
-        for shift in [1e-12, 1e-10, 1e-8] {
-            for i in 0..shifted.nrows {
-                let at = shifted.position(i, i).expect("Galerkin operators keep their diagonal");
-                shifted.val[at] = self.coarse_a.val[at] * (1.0 + shift);
-            }
-            if self.coarse.factor(&shifted, structure).is_ok() {
-                return Ok(());
-            }
-        }
-        Err(err)
+        self.coarse.factor(&self.coarse_a, Structure { node_ptr: &ptr, near_null: &null, count: 0 })
     }
 
     fn solve_coarse(&mut self) {
