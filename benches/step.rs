@@ -6,7 +6,7 @@
 //! prints the same measurement as a table with iterations and memory.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use deformesh::bench::{ball_deformation, demo_deformation};
+use deformesh::app::bench::{ball_deformation, demo_deformation};
 use deformesh::deform::{Deformation, Q1Mesh, SolverChoice};
 
 fn time<M: Q1Mesh<D, N>, const D: usize, const N: usize>(c: &mut Criterion, group: &str, name: String, mut d: Deformation<M, D, N>) {

@@ -6,8 +6,8 @@
 //!
 //!     cargo run --release --example tolerance -- [2|3] [cells per side]
 
-use deformesh::case::{AnySetup, Case, DEMO_CASE};
-use deformesh::bench::QUARTER_BALL;
+use deformesh::app::case::{AnySetup, Case, DEMO_CASE};
+use deformesh::app::bench::QUARTER_BALL;
 use deformesh::deform::{Deformation, Deformation3, SolverChoice};
 use std::path::Path;
 

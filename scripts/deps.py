@@ -11,8 +11,9 @@ code: their edges are listed apart and not judged.
 Prints: lines per module and layer, the graph (module -> modules it uses),
 and the edges that break the target layering of issue 12:
 
-  application  main lib case driver bench bind        may use anything
-  method       deform (Alg. 1, 2)  highorder (Alg. 3)  core; highorder may use deform
+  application  main lib app (case, bind, driver, bench)   may use anything
+  method       deform (Alg. 1) <- refine (Alg. 2) <- highorder (Alg. 3)
+               core, and only down that chain
   io / render  io render                              core only
   core         lsfem solve mesh geometry geometry3 numeric expr jacobian quality hexquality
                core only, and no cycles
@@ -28,15 +29,15 @@ from collections import defaultdict
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src")
 
 LAYER = {
-    "main": "application", "lib": "application", "case": "application",
-    "driver": "application", "bench": "application", "bind": "application",
-    "deform": "method", "highorder": "method",
+    "main": "application", "lib": "application", "app": "application",
+    "deform": "method", "refine": "method", "highorder": "method",
     "io": "io/render", "render": "io/render",
 }
 CORE = ["lsfem", "solve", "mesh", "geometry", "geometry3", "numeric", "expr",
         "jacobian", "quality", "hexquality"]
 for m in CORE:
     LAYER[m] = "core"
+METHOD = ["deform", "refine", "highorder"]  # Algorithms 1, 2, 3
 RANK = {"core": 0, "io/render": 1, "method": 2, "application": 3}
 ORDER = ["application", "method", "io/render", "core"]
 
@@ -143,8 +144,8 @@ def main():
                 return "upward"
             if lb == "io/render":
                 return "method uses io/render"
-            if a == "deform" and b == "highorder":
-                return "upward (Alg. 1/2 uses Alg. 3)"
+            if lb == "method" and METHOD.index(b) > METHOD.index(a):
+                return f"upward ({a} is below {b})"
             return None
         if la == "io/render":
             if lb in ("application", "method"):

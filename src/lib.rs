@@ -3,13 +3,13 @@
 //! div-curl solve per pseudo-time step moves the mesh so that its Jacobian
 //! determinant follows a prescribed positive function).
 //!
-//! The usual path is a case file ([`case::Case`]) turned into a setup and
-//! run by [`driver::run_any`]; the pieces are usable on their own:
+//! The usual path is a case file ([`app::case::Case`]) turned into a setup and
+//! run by [`app::driver::run_any`]; the pieces are usable on their own:
 //! [`deform::Deformation`] is Algorithm 1 on any [`mesh::QuadMesh`] or
 //! [`mesh::HexMesh`].
 //!
 //! ```
-//! use deformesh::case::{Case, DEMO_CASE};
+//! use deformesh::app::case::{Case, DEMO_CASE};
 //! use deformesh::deform::Deformation;
 //!
 //! // the seed's quarter disk, coarse: the unit square onto a quarter of
@@ -24,11 +24,8 @@
 //! assert!(worst < 1e-10); // the moving sides lie on the circle
 //! ```
 
-pub mod bench;
-pub mod bind;
-pub mod case;
+pub mod app;
 pub mod deform;
-pub mod driver;
 pub mod expr;
 pub mod geometry;
 pub mod hexquality;
@@ -39,5 +36,6 @@ pub mod lsfem;
 pub mod mesh;
 pub mod numeric;
 pub mod quality;
+pub mod refine;
 pub mod render;
 pub mod solve;

@@ -3,10 +3,10 @@
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use deformesh::case::{Case, DEMO_CASE};
-use deformesh::case::AnySetup;
+use deformesh::app::case::{Case, DEMO_CASE};
+use deformesh::app::case::AnySetup;
 use deformesh::deform::SolverChoice;
-use deformesh::driver::{run_any, Progress, RunError, REPORT};
+use deformesh::app::driver::{run_any, Progress, RunError, REPORT};
 use deformesh::io::folder::check_run_folder;
 use deformesh::highorder::curve::{certify_mesh, CurvedQuality};
 use deformesh::io::msh::MshError;
@@ -147,9 +147,9 @@ fn run(cli: Cli) -> Result<()> {
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, flow, shape_tolerance, ..Default::default() };
             deformesh::io::folder::check_output_file(&out)?;
-            let job = deformesh::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
+            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
             let bar = Bar::new();
-            let r = deformesh::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
+            let r = deformesh::app::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
             bar.finish();
             let r = r?;
             if r.reoriented_cells > 0 {
@@ -191,7 +191,7 @@ fn run(cli: Cli) -> Result<()> {
                 "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "iters", "us/unknown", "cores", "first_s", "setup_s", "peak_MiB"
             );
             for n in sizes {
-                let b = if dim == 2 { deformesh::bench::one_step(n, repeat, solver) } else { deformesh::bench::one_step_3d(n, repeat, solver) };
+                let b = if dim == 2 { deformesh::app::bench::one_step(n, repeat, solver) } else { deformesh::app::bench::one_step_3d(n, repeat, solver) };
                 let b = b.map_err(|e| anyhow::anyhow!(e))?;
                 println!(
                     "{:>6} {:>10} {:>11.4} {:>11.4} {:>11.4} {:>11.4} {:>6} {:>12.3} {:>6.2} {:>11.4} {:>11.4} {:>10}",
@@ -206,7 +206,7 @@ fn run(cli: Cli) -> Result<()> {
                     b.cores_busy,
                     b.first_step_s,
                     b.setup_s,
-                    deformesh::bench::peak_memory_mib().map_or("n/a".to_string(), |m| format!("{m:.0}"))
+                    deformesh::app::bench::peak_memory_mib().map_or("n/a".to_string(), |m| format!("{m:.0}"))
                 );
             }
             Ok(())

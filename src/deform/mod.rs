@@ -22,7 +22,6 @@
 
 mod chains;
 mod patches;
-pub mod refine;
 pub mod strain;
 
 /// A target or wall shape in D dimensions (see [`crate::geometry::ClosestPoint`]).
@@ -125,7 +124,7 @@ pub(crate) fn check_meeting<const D: usize>(parts: &[BoundaryPart<D>], a: usize,
 
 impl<const D: usize> BoundaryPart<D> {
     /// The image X(p) on the target of a starting point p of a moving part.
-    fn image(&self, p: [f64; D]) -> Option<[f64; D]> {
+    pub(crate) fn image(&self, p: [f64; D]) -> Option<[f64; D]> {
         match &self.kind {
             PartKind::Move { target, correspondence, .. } => match correspondence {
                 Correspondence::Radial { centre } => target.ray_hit(*centre, std::array::from_fn(|i| p[i] - centre[i])),

@@ -2,14 +2,14 @@
 //! in, a certified curved mesh of order-p Lagrange elements out.
 //!
 //! The coarse mesh is subdivided at the element nodes, Algorithm 2
-//! ([`crate::deform::refine`]) carries the new boundary nodes onto the
+//! ([`crate::refine`]) carries the new boundary nodes onto the
 //! true geometry, and each coarse cell's (p+1)^d fine nodes become one
 //! element (Algorithm 3). Every element is then certified by the Bézier
 //! bounds of its det J, and the curved boundary is sampled against the
 //! exact shapes.
 
 use super::{certify_hex, certify_quad, check_order, nodes_1d, Basis1d, Certificate, HighOrderError, Spacing};
-use crate::deform::refine::{refine_parts, subdivide, RefineMesh, Subdividable};
+use crate::refine::{refine_parts, subdivide, RefineMesh, Subdividable};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
@@ -99,7 +99,7 @@ pub enum CurveError {
     InvalidCoarse(Vec<usize>),
     /// The mesh's boundary elements do not fit its cells.
     #[error(transparent)]
-    Subdivide(#[from] crate::deform::refine::SubdivideError),
+    Subdivide(#[from] crate::refine::SubdivideError),
     /// Algorithm 2 failed (a tangle, an unreachable target, ...).
     #[error("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): {}", with_causes(.0))]
     Deform(DeformError),

@@ -19,7 +19,7 @@ use deformesh::io::vtu::{VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_Q
 use deformesh::mesh::CurvedMesh;
 use serde_json::{json, Value};
 
-mod common;
+use crate::common;
 use common::{floats, run_checker};
 
 /// Random reference points per element.

@@ -2,9 +2,9 @@
 //! figures the issue asks for: validity, J/f bounds, boundary accuracy,
 //! and convergence of J/f under refinement.
 
-mod common;
+use crate::common;
 use common::GAUSS5;
-use deformesh::case::{Case, DEMO_CASE};
+use deformesh::app::case::{Case, DEMO_CASE};
 use deformesh::deform::{Deformation, Integrator};
 use deformesh::expr::Expr;
 use deformesh::jacobian::JacobianField;

@@ -1,9 +1,9 @@
 //! Algorithm 1 on hexahedral meshes: the seed's 3D figures, with the
 //! figures the issue asks for.
 
-mod common;
+use crate::common;
 use common::GAUSS5;
-use deformesh::case::{AnySetup, Case, Setup};
+use deformesh::app::case::{AnySetup, Case, Setup};
 use deformesh::deform::Deformation3;
 use deformesh::hexquality::{corner_det_j, det_j};
 use deformesh::lsfem::gauss_points;
@@ -170,7 +170,7 @@ fn expression_field_in_3d_is_normalised() {
     // cells crowd towards the bottom: f small where z is small
     let s = setup("quarter_ball.toml", |c| {
         c.mesh.cells = vec![6, 6, 6];
-        c.jacobian.field = deformesh::case::FieldSpec::Expression { f: "0.5 + z".into() };
+        c.jacobian.field = deformesh::app::case::FieldSpec::Expression { f: "0.5 + z".into() };
     });
     let d = run(s);
     assert_valid(&d);

@@ -26,7 +26,7 @@
 //!   onto it; a flat slip wall keeps its nodes gliding in its plane;
 //! - fixed parts stay.
 
-use super::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
+use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
 use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, QuadMesh};
 use std::collections::HashMap;
@@ -782,7 +782,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
                 for &b in parts_here.iter().filter(|&&b| b != a && moving(b)) {
                     for s in [0.25, 0.5, 0.75] {
                         let x = std::array::from_fn(|k| (1.0 - s) * ends[0][k] + s * ends[1][k]);
-                        super::check_meeting(&parts, a, b, x, h)?;
+                        crate::deform::check_meeting(&parts, a, b, x, h)?;
                     }
                 }
             }

@@ -1,7 +1,7 @@
 //! Scaling measurements of one pseudo-time step (`deformesh bench` and the
 //! criterion bench): the quarter-disk problem on an n×n box, timed by phase.
 
-use crate::case::{AnySetup, Case, DEMO_CASE};
+use crate::app::case::{AnySetup, Case, DEMO_CASE};
 use crate::deform::{Deformation, Deformation3, Q1Mesh, SolverChoice};
 use std::path::Path;
 
@@ -40,7 +40,7 @@ impl StepTiming {
 }
 
 /// The quarter-ball case (`cases/quarter_ball.toml`) at n³ cells.
-pub const QUARTER_BALL: &str = include_str!("../cases/quarter_ball.toml");
+pub const QUARTER_BALL: &str = include_str!("../../cases/quarter_ball.toml");
 
 /// Errors of the benchmark helpers (case, setup or deformation).
 pub type BenchError = Box<dyn std::error::Error + Send + Sync>;

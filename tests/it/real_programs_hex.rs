@@ -11,7 +11,7 @@ use deformesh::io::msh::{write_hex_msh, DOMAIN_NAME};
 use deformesh::io::vtu::{write_hex_vtu, VTK_HEXAHEDRON};
 use deformesh::mesh::HexMesh;
 
-mod common;
+use crate::common;
 use common::{floats, run_checker};
 
 
@@ -235,7 +235,7 @@ fn gmsh_refines_loose_bezier_bounds_like_hex_is_valid() {
 /// its extreme Jacobian determinants agree with report.json's (÷ 8).
 #[test]
 fn gmsh_agrees_with_the_report_of_a_3d_run() {
-    use deformesh::case::{AnySetup, Case};
+    use deformesh::app::case::{AnySetup, Case};
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/quarter_ball.toml");
     let mut case = Case::read(&path).unwrap();
     case.mesh.cells = vec![6, 6, 6];
@@ -244,7 +244,7 @@ fn gmsh_agrees_with_the_report_of_a_3d_run() {
     let AnySetup::Hex(setup) = case.setup_any("quarter_ball", Path::new(".")).unwrap() else { panic!("3D case") };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let report = deformesh::driver::run_setup::<_, 3, 8>(setup, &out, |_| {}).unwrap();
+    let report = deformesh::app::driver::run_setup::<_, 3, 8>(setup, &out, |_| {}).unwrap();
     assert_eq!(report.invalid_cells, 0);
     let gmsh = run_checker("check_msh.py", &out.join("mesh.msh"));
     let types = gmsh["element_types"].as_object().unwrap();

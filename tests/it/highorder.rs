@@ -1,11 +1,11 @@
 //! Algorithms 2 and 3: curved meshes of order-p Lagrange elements, certified
 //! valid, on the exact geometry, read back by the real Gmsh.
 
-mod common;
+use crate::common;
 
-use deformesh::case::{AnySetup, Case};
+use deformesh::app::case::{AnySetup, Case};
 use deformesh::deform::{BoundaryPart, Deformation, MoveMode, PartKind};
-use deformesh::driver::{run_any, Report, RunError};
+use deformesh::app::driver::{run_any, Report, RunError};
 use deformesh::highorder::curve::{curve, CurveError, CurveOptions};
 use deformesh::mesh::QuadMesh;
 use std::path::Path;

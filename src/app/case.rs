@@ -686,4 +686,4 @@ fn part_kind<const D: usize>(spec: &PartSpec) -> Result<PartKind<D>, String> {
 
 /// The built-in default case: the seed's Figure 2, the unit square onto
 /// the quarter disk of radius 1.25 (`deformesh demo`).
-pub const DEMO_CASE: &str = include_str!("../cases/quarter_disk.toml");
+pub const DEMO_CASE: &str = include_str!("../../cases/quarter_disk.toml");

@@ -10,7 +10,7 @@ use deformesh::io::msh::{write_msh, DOMAIN_NAME};
 use deformesh::io::vtu::{write_vtu, VTK_QUAD};
 use deformesh::mesh::{Point2, QuadMesh};
 
-mod common;
+use crate::common;
 use common::{floats, run_checker};
 
 
@@ -212,14 +212,14 @@ fn vtk_reads_our_vtu() {
 /// extreme Jacobian determinants agree with report.json's.
 #[test]
 fn gmsh_agrees_with_the_report_of_a_run() {
-    use deformesh::case::{Case, DEMO_CASE};
+    use deformesh::app::case::{Case, DEMO_CASE};
     let dir = tempfile::tempdir().unwrap();
     let setup = Case::parse(DEMO_CASE, "demo")
         .unwrap()
         .setup("demo", Path::new("."))
         .unwrap();
     let out = dir.path().join("out");
-    let report = deformesh::driver::run_setup::<_, 2, 4>(setup, &out, |_| {}).unwrap();
+    let report = deformesh::app::driver::run_setup::<_, 2, 4>(setup, &out, |_| {}).unwrap();
     let gmsh = run_checker("check_msh.py", &out.join("mesh.msh"));
     let types = gmsh["element_types"].as_object().unwrap();
     assert_eq!(types["3"]["count"], 400);

@@ -14,7 +14,7 @@
 //!
 //! Groups of the mesh that the file does not name stay as they are.
 
-use crate::case::CaseError;
+use crate::app::case::CaseError;
 use crate::deform::{BoundaryPart, Correspondence, MoveMode, PartKind};
 use crate::expr::Expr;
 use crate::geometry::{shape_from_toml, ClosestPoint, LevelSet};

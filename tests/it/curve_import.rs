@@ -1,9 +1,9 @@
 //! `deformesh curve`: a user's linear Gmsh mesh, its boundary groups bound
 //! to exact shapes, curved to certified high-order elements.
 
-mod common;
+use crate::common;
 
-use deformesh::driver::{curve_file, CurveJob, CurveReport, RunError};
+use deformesh::app::driver::{curve_file, CurveJob, CurveReport, RunError};
 use deformesh::highorder::curve::CurveOptions;
 use deformesh::mesh::CurvedMesh;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! Adaptive prescribed Jacobians: interfaces, pictures and combinations,
 //! and the seed's adaptive figures at test resolution.
 
-use deformesh::case::{AnySetup, Case, Setup};
+use deformesh::app::case::{AnySetup, Case, Setup};
 use deformesh::deform::{Deformation, Deformation3};
 use deformesh::jacobian::{ImageField, SmallWhere};
 use deformesh::mesh::{HexMesh, QuadMesh};

@@ -5,8 +5,8 @@
 //! Outputs are produced in memory and written only when the run has
 //! succeeded, each file atomically, so a failed run leaves nothing behind.
 
-use crate::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
-use crate::deform::refine::Subdividable;
+use crate::app::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
+use crate::refine::Subdividable;
 use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
 use crate::highorder::curve::{curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
 use crate::highorder::Spacing;
@@ -567,7 +567,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     check_output_file(&job.output)?;
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
     let read = crate::io::msh::parse_any(&bytes, true)?;
-    let geometry = crate::bind::GeometryFile::read(&job.geometry)?;
+    let geometry = crate::app::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
     // either may relax the check that curved groups lie on their shapes
     let mut job = job.clone();
@@ -577,7 +577,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let result = match read.mesh {
         AnyMesh::Hexes(mesh) => {
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
-            geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
+            geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
             curve_mesh(&mesh, &parts, (unbound, &shared), 0, &job, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3)))
         }
@@ -585,7 +585,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
             // Gmsh may write a surface's quads clockwise (by its normal)
             let turned = mesh.orient_counter_clockwise();
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
-            geometry.check_carried(&mesh.part_names, &crate::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
+            geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
             curve_mesh(&mesh, &parts, (unbound, &shared), turned, &job, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2)))
         }
@@ -617,7 +617,7 @@ fn one_group_per_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(me
         };
         let other = kept[k].1;
         if bound(part) && bound(other) {
-            return Err(crate::case::CaseError {
+            return Err(crate::app::case::CaseError {
                 file: gfile.to_string(),
                 message: format!(
                     "groups `{}` and `{}` share boundary elements (a curve or surface in both groups), and both are bound here: an element can have one behaviour only; bind one of them, or give the shared part a group of its own",

@@ -3,7 +3,6 @@
 //!
 //! The Python interpreter is `$DEFORMESH_PYTHON`, else `.venv/bin/python` in
 //! the crate; `scripts/test.sh` sets the latter up.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

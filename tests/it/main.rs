@@ -1,0 +1,17 @@
+//! The integration tests, one test binary: each linked binary costs CI
+//! a link of the whole library at the test profile's opt-level 3, so the
+//! files are modules of this one crate rather than binaries of their own.
+//! `cargo test --test it cli::` runs one file's tests.
+
+#[allow(dead_code)]
+mod common;
+
+mod adaptation;
+mod cli;
+mod curve_import;
+mod deformation;
+mod deformation3d;
+mod highorder;
+mod real_programs;
+mod real_programs_hex;
+mod real_programs_highorder;
