@@ -57,7 +57,9 @@ enum Command {
         /// corner's Jacobian within 25 % of its value in each step).
         #[arg(long)]
         steps: Option<usize>,
-        /// sliding (default) or dirichlet: how new nodes reach the shapes.
+        /// How new nodes reach the shapes: sliding (default: slide with the
+        /// flow, then settle at their intended places), sliding_only (leave
+        /// them where sliding put them) or dirichlet (straight paths).
         #[arg(long, default_value = "sliding")]
         mode: String,
         /// Linear solver of Algorithm 2: auto, cholesky, cholesky_cg, cg or amg.
@@ -138,14 +140,15 @@ fn run(cli: Cli) -> Result<()> {
             anyhow::ensure!(steps != Some(0), "--steps must be at least 1");
             let spacing: deformesh::highorder::Spacing = serde_json::from_value(serde_json::Value::String(spacing.clone()))
                 .map_err(|_| anyhow::anyhow!("--spacing must be equispaced or gauss_lobatto, got `{spacing}`"))?;
-            let dirichlet = match mode.as_str() {
-                "sliding" => false,
-                "dirichlet" => true,
-                other => anyhow::bail!("--mode must be sliding or dirichlet, got `{other}`"),
+            let (dirichlet, settle) = match mode.as_str() {
+                "sliding" => (false, true),
+                "sliding_only" => (false, false),
+                "dirichlet" => (true, false),
+                other => anyhow::bail!("--mode must be sliding, sliding_only or dirichlet, got `{other}`"),
             };
             let solver = solver_choice(&solver)?;
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
-            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, flow, shape_tolerance, ..Default::default() };
+            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, ..Default::default() };
             deformesh::io::folder::check_output_file(&out)?;
             let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
             let bar = Bar::new();
@@ -163,6 +166,7 @@ fn run(cli: Cli) -> Result<()> {
                 "boundary distance: nodes {:.3e}  sampled {:.3e}",
                 r.quality.boundary_node_distance, r.quality.boundary_sample_distance
             );
+            println!("{}", settling_line(&r.quality.settling));
             let runs = if r.algorithm2_runs > 1 { format!(", run {} times with shorter steps", r.algorithm2_runs) } else { String::new() };
             println!("time: algorithm 2 {:.3}s ({} steps, {} halved{runs})  certification {:.3}s  total {:.3}s", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
             println!("wrote {}", r.outputs.join(", "));
@@ -362,4 +366,19 @@ fn curved_figures<const D: usize>((mesh, tags): (deformesh::mesh::CurvedMesh<D>,
 /// Cell indices as the file's element tags.
 fn to_tags(cells: &[usize], tags: &[u64]) -> Vec<usize> {
     cells.iter().map(|&c| tags.get(c).map_or(c, |&t| t as usize)).collect()
+}
+
+/// One line on the settling pass of `curve`.
+fn settling_line(s: &deformesh::highorder::curve::Settling) -> String {
+    match (&s.kept_sliding, s.how) {
+        (Some(why), _) => format!("settling: nodes left where sliding put them ({why})"),
+        (None, how) => {
+            let demoted = if s.demoted_elements.is_empty() {
+                String::new()
+            } else {
+                format!("; {} element(s) (0-based) kept nearer their sliding places to stay valid: {:?}", s.demoted_elements.len(), s.demoted_elements)
+            };
+            format!("settling: new boundary nodes put at their places along the arcs ({}, largest move {:.2e}){demoted}", how.unwrap_or("-"), s.largest_move)
+        }
+    }
 }

@@ -316,6 +316,14 @@ pub struct HighOrderSpec {
     /// Steps of Algorithm 2 (default: half those of Algorithm 1, at least 4).
     #[serde(default)]
     pub steps: Option<usize>,
+    /// Settle the sliding nodes at their intended places after Algorithm 2
+    /// (default true; see [`CurveOptions::settle`]).
+    #[serde(default = "yes")]
+    pub settle: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// The `[output]` table.
@@ -522,7 +530,7 @@ impl Case {
                 }
                 let steps = h.steps.unwrap_or((self.time.steps / 2).max(4));
                 let flow = DeformOptions { integrator: self.time.integrator, div_weight: self.time.div_weight, solver: self.time.solver, tolerance: self.time.tolerance, ..Default::default() };
-                Some(CurveOptions { order: h.order, spacing: h.spacing, steps: Some(steps), flow, ..Default::default() })
+                Some(CurveOptions { order: h.order, spacing: h.spacing, steps: Some(steps), settle: h.settle, flow, ..Default::default() })
             }
         };
         let mut output = self.output.clone();

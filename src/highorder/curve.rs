@@ -9,7 +9,7 @@
 //! exact shapes.
 
 use super::{certify_hex, certify_quad, check_order, nodes_1d, Basis1d, Certificate, HighOrderError, Spacing};
-use crate::refine::{refine_parts, subdivide, RefineMesh, Subdividable};
+use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
@@ -38,6 +38,11 @@ pub struct CurveOptions {
     /// New nodes of every curved part follow straight paths to their
     /// images (the paper's Dirichlet data) instead of sliding.
     pub dirichlet: bool,
+    /// After sliding, settle: move the new nodes of curved parts to the
+    /// images of their places on the flat facets, with the flow carrying
+    /// the cells next to them ([`crate::refine::RefineMesh::settling`]),
+    /// and keep the result if every element stays certified valid.
+    pub settle: bool,
     /// How far a node of a curved part may lie from its shape, relative
     /// to the shortest edge of its boundary elements: checked on the input
     /// (the shape must match the mesh) and on the result (no node pinned
@@ -72,7 +77,7 @@ pub const AUTO_STEPS: [usize; 4] = [1, 2, 4, 8];
 
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, shape_tolerance: DEFAULT_SHAPE_TOLERANCE }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE }
     }
 }
 
@@ -237,6 +242,34 @@ pub struct CurvedQuality {
     /// node across its cell (the opposite face, same face coordinates),
     /// curved against straight, at the coarse vertices and over all nodes.
     pub first_layer_change: std::collections::BTreeMap<String, FirstLayer>,
+    /// Per curved group, the largest distance of its nodes and of its
+    /// sampled boundary to its shape.
+    pub boundary_error: std::collections::BTreeMap<String, BoundaryError>,
+    /// The settling pass that puts the sliding nodes at their intended
+    /// places.
+    pub settling: Settling,
+}
+
+/// What the settling pass did ([`CurveOptions::settle`]).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Settling {
+    /// The pass ran and its mesh is the result.
+    pub applied: bool,
+    /// `snap` (the nodes alone were put at their places) or `flow` (the
+    /// correction ran as a flow, moving the cells next to the wall too).
+    pub how: Option<&'static str>,
+    /// The largest distance a node moved in the pass.
+    pub largest_move: f64,
+    /// Its accepted steps.
+    pub steps: usize,
+    /// Elements whose new boundary nodes did not go to their places along
+    /// the arc, as placing them there left the element not certified
+    /// valid: they went to the images of their flat places or, failing
+    /// that too, stayed where sliding put them.
+    pub demoted_elements: Vec<usize>,
+    /// Why the nodes were left where sliding put them, if they were (the
+    /// pass was off, tangled, or left elements not certified valid).
+    pub kept_sliding: Option<String>,
 }
 
 /// Largest relative change of the first-layer height along a curved group.
@@ -286,8 +319,14 @@ pub fn certify_element<const D: usize>(p: usize, spacing: Spacing, ctrl: &[[f64;
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
     let certs: Vec<Certificate> =
         (0..mesh.cells.len()).into_par_iter().map(|c| certify_element(mesh.p, mesh.spacing, &mesh.cell_coords(c))).collect::<Result<_, _>>()?;
+    let q = summary(mesh, &certs);
+    Ok((certs, q))
+}
+
+/// The summary of a mesh's certificates, without the boundary figures.
+fn summary<const D: usize>(mesh: &CurvedMesh<D>, certs: &[Certificate]) -> CurvedQuality {
     let invalid = certs.iter().enumerate().filter(|(_, c)| !c.valid).map(|(i, _)| i).collect();
-    let q = CurvedQuality {
+    CurvedQuality {
         order: mesh.p,
         elements: mesh.cells.len(),
         nodes: mesh.nodes.len(),
@@ -299,8 +338,9 @@ pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certifi
         boundary_node_distance: 0.0,
         boundary_sample_distance: 0.0,
         first_layer_change: Default::default(),
-    };
-    Ok((certs, q))
+        boundary_error: Default::default(),
+        settling: Settling::default(),
+    }
 }
 
 /// Runs Algorithms 2 and 3 on a valid coarse mesh whose boundary facets
@@ -353,7 +393,7 @@ where
     };
     let mut attempts = 0;
     let mut certify_s = 0.0;
-    let (def, mesh, certificates, mut quality) = loop {
+    let slid = loop {
         let flow = schedule[attempts].clone();
         attempts += 1;
         let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
@@ -374,10 +414,26 @@ where
         // (measured: a 1e-5 layer at p = 3 in one step): then again with
         // shorter steps
         if quality.invalid_elements.is_empty() || attempts == schedule.len() {
-            break (def, mesh, certificates, quality);
+            let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+            // the solver is dropped here, before settling builds its own
+            break Pass { mesh, certificates, quality, stats: def.stats.clone(), solver: def.solver_report(), moved_distance };
         }
     };
-    let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+    let why_not = if opts.dirichlet {
+        Some("Dirichlet data: the nodes are at their places")
+    } else if !opts.settle {
+        Some("settling is off")
+    } else {
+        None
+    };
+    let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = match why_not {
+        Some(why) => {
+            let mut pass = slid;
+            pass.quality.settling.kept_sliding = Some(why.into());
+            pass
+        }
+        None => settle(&sub, &parts2, opts, slid, &mut certify_s),
+    };
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
@@ -391,9 +447,150 @@ where
     // every node of a curved boundary element, the old (fixed) ones too:
     // they were not moved, so only this shows a vertex off its shape
     quality.boundary_node_distance = moved_distance.max(node_distance(&mesh, &parts2));
-    quality.boundary_sample_distance = sampled_distance(&mesh, &parts2, opts.samples)?;
+    quality.boundary_error = boundary_errors(&mesh, &parts2, opts.samples)?;
+    quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
-    Ok(Curved { mesh, certificates, quality, stats: def.stats.clone(), attempts, solver: def.solver_report(), seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
+    Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
+}
+
+/// A curved mesh as a pass of Algorithm 2 left it, certified.
+struct Pass<const D: usize> {
+    mesh: CurvedMesh<D>,
+    certificates: Vec<Certificate>,
+    quality: CurvedQuality,
+    stats: RunStats,
+    solver: crate::deform::SolverReport,
+    /// The largest distance of a moved boundary node to its shape.
+    moved_distance: f64,
+}
+
+/// The settling pass ([`CurveOptions::settle`]) on a sliding result: its
+/// mesh if no element certified valid before is invalid after, else the
+/// sliding result with the reason.
+fn settle<M, const D: usize, const N: usize>(sub: &Subdivision<M, D>, parts: &[BoundaryPart<D>], opts: &CurveOptions, slid: Pass<D>, certify_s: &mut f64) -> Pass<D>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    let t0 = Instant::now();
+    match settled(sub, parts, opts, &slid, certify_s) {
+        Ok(pass) if newly_invalid(&pass, &slid).is_empty() => pass,
+        other => {
+            let why = match other {
+                Ok(p) => {
+                    let bad = newly_invalid(&p, &slid);
+                    format!("{} elements would not be certified valid, the first {:?}", bad.len(), &bad[..bad.len().min(5)])
+                }
+                Err(e) => with_causes(&e),
+            };
+            tracing::info!("settling skipped after {:.2} s: {why}", t0.elapsed().as_secs_f64());
+            let mut pass = slid;
+            pass.quality.settling.kept_sliding = Some(why);
+            pass
+        }
+    }
+}
+
+/// The settled mesh. Every new node of a curved facet goes to its place
+/// along the arc ([`Settle::Arc`]); where that leaves an element not
+/// certified valid, that element's nodes go to the images of their flat
+/// places instead, then stay where sliding left them ([`Settle::next`]).
+fn settled<M, const D: usize, const N: usize>(sub: &Subdivision<M, D>, parts: &[BoundaryPart<D>], opts: &CurveOptions, slid: &Pass<D>, certify_s: &mut f64) -> Result<Pass<D>, CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    let mut plan = vec![Settle::Arc; slid.mesh.nodes.len()];
+    let mut demoted = std::collections::BTreeSet::new();
+    loop {
+        let mut pass = settle_once(sub, parts, opts, slid, &plan, certify_s)?;
+        let bad = newly_invalid(&pass, slid);
+        let mut changed = false;
+        for &c in &bad {
+            demoted.insert(c);
+            for &n in &slid.mesh.cells[c] {
+                changed |= plan[n] != plan[n].next();
+                plan[n] = plan[n].next();
+            }
+        }
+        if bad.is_empty() || !changed {
+            pass.quality.settling.demoted_elements = demoted.into_iter().collect();
+            return Ok(pass);
+        }
+    }
+}
+
+/// Elements not certified valid in `pass` that were in `slid` (an
+/// element sliding left invalid is not the settling's doing).
+fn newly_invalid<const D: usize>(pass: &Pass<D>, slid: &Pass<D>) -> Vec<usize> {
+    pass.quality.invalid_elements.iter().copied().filter(|e| slid.quality.invalid_elements.binary_search(e).is_err()).collect()
+}
+
+/// One try of the settling pass with a given plan: first the new nodes
+/// alone are put at their places (enough when the cells are not much
+/// thinner than the correction); if that costs an element validity or
+/// quality, the correction is run as a flow that carries the cells next
+/// to the wall along.
+fn settle_once<M, const D: usize, const N: usize>(
+    sub: &Subdivision<M, D>,
+    parts: &[BoundaryPart<D>],
+    opts: &CurveOptions,
+    slid: &Pass<D>,
+    plan: &[Settle],
+    certify_s: &mut f64,
+) -> Result<Pass<D>, CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    use crate::deform::{BoundaryModel, Q1Mesh};
+    let start = sub.refine_mesh().settling(&slid.mesh.nodes, plan.to_vec());
+    let mut boundary = start.boundary(parts.to_vec())?;
+    let mut nodes = slid.mesh.nodes.clone();
+    boundary.put_back(&mut nodes, 1.0);
+    let largest_move = largest_distance(&nodes, &slid.mesh.nodes);
+    let moved_distance = boundary.distances(&nodes).iter().map(|d| d.1).fold(0.0, f64::max);
+    let t0 = Instant::now();
+    let snapped = CurvedMesh { nodes, ..slid.mesh.clone() };
+    let mut certificates = slid.certificates.clone();
+    let touched: Vec<usize> = (0..snapped.cells.len()).filter(|&c| snapped.cells[c].iter().any(|&n| snapped.nodes[n] != slid.mesh.nodes[n])).collect();
+    let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certify_element(snapped.p, snapped.spacing, &snapped.cell_coords(c))).collect::<Result<_, _>>()?;
+    // a snap that shears a thin cell stays valid but ruins it (measured:
+    // a 1e-5 layer at p = 4, min scaled Jacobian 0.72 → 0.001): snapping
+    // must keep every element's scaled Jacobian within SNAP_KEEP of before
+    let mut kept = true;
+    for (&c, cert) in touched.iter().zip(fresh) {
+        let was = &certificates[c];
+        kept &= !was.valid || (cert.valid && cert.min_scaled_jacobian >= SNAP_KEEP * was.min_scaled_jacobian);
+        certificates[c] = cert;
+    }
+    let mut quality = summary(&snapped, &certificates);
+    *certify_s += t0.elapsed().as_secs_f64();
+    if kept {
+        quality.settling = Settling { applied: true, how: Some("snap"), largest_move, steps: 0, ..Default::default() };
+        return Ok(Pass { mesh: snapped, certificates, quality, stats: slid.stats.clone(), solver: slid.solver.clone(), moved_distance });
+    }
+    // the correction is small: as few steps as the step control allows
+    let flow = DeformOptions { steps: 1, max_strain: Some(opts.step_change), ..opts.flow.clone() };
+    let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(start, parts.to_vec(), JacobianField::uniform(), flow)?;
+    def.run(&[], |_| {}, |_| {})?;
+    let mesh = CurvedMesh { nodes: def.mesh.mesh.nodes().to_vec(), ..snapped };
+    let t0 = Instant::now();
+    let (certificates, mut quality) = certify_mesh(&mesh)?;
+    *certify_s += t0.elapsed().as_secs_f64();
+    let largest_move = largest_distance(&mesh.nodes, &slid.mesh.nodes);
+    quality.settling = Settling { applied: true, how: Some("flow"), largest_move, steps: def.stats.steps, ..Default::default() };
+    let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+    Ok(Pass { mesh, certificates, quality, stats: slid.stats.clone(), solver: slid.solver.clone(), moved_distance })
+}
+
+/// How much of an element's scaled Jacobian a snap of the settling pass
+/// must keep; below it the correction is run as a flow.
+const SNAP_KEEP: f64 = 0.9;
+
+/// The largest distance between corresponding points of `a` and `b`.
+fn largest_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max)
 }
 
 /// Per moving (or curved slip) part, the largest relative change of the
@@ -473,49 +670,73 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
 /// The largest distance of a node of a boundary element of a moving (or
 /// curved slip) part to its shape.
 pub fn node_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>]) -> f64 {
-    mesh.boundary
-        .iter()
-        .filter_map(|b| match &parts.get(b.part)?.kind {
-            PartKind::Move { target, .. } => Some(b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max)),
-            _ => None,
-        })
-        .fold(0.0, f64::max)
+    per_part(mesh, parts, |b, target| b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max)).into_iter().fold(0.0, f64::max)
 }
 
-/// The largest distance from the curved boundary of moving (and curved
-/// slip) parts, sampled on a grid of `samples` points per direction of
-/// each boundary element, to the part's shape.
-pub fn sampled_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<f64, HighOrderError> {
-    let basis = Basis1d::new(mesh.p, mesh.spacing)?;
-    let m = samples.max(2);
-    let at: Vec<Vec<f64>> = (0..=m).map(|k| basis.eval(k as f64 / m as f64).0).collect();
+/// Per curved group, the boundary error: the largest distance of its nodes
+/// and of its sampled boundary to its shape.
+pub fn boundary_errors<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<std::collections::BTreeMap<String, BoundaryError>, HighOrderError> {
+    let nodes = per_part(mesh, parts, |b, target| b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max));
+    let sampled = sampled_per_part(mesh, parts, samples)?;
+    Ok(parts
+        .iter()
+        .enumerate()
+        .filter(|(_, part)| matches!(part.kind, PartKind::Move { .. }))
+        .map(|(k, part)| (part.name.clone(), BoundaryError { nodes: nodes[k], samples: sampled[k] }))
+        .collect())
+}
+
+/// The boundary error of one curved group ([`boundary_errors`]).
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct BoundaryError {
+    /// The largest distance of a node to the shape.
+    pub nodes: f64,
+    /// The largest distance of a sampled boundary point to the shape.
+    pub samples: f64,
+}
+
+/// Per part, the largest of `f(boundary element, shape)` over the boundary
+/// elements of moving (and curved slip) parts; 0 for other parts.
+fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: impl Fn(&CurvedBoundary, &std::sync::Arc<dyn crate::deform::BoundaryShape<D>>) -> f64 + Sync) -> Vec<f64> {
     let worst = mesh
         .boundary
         .par_iter()
         .filter_map(|b| match &parts.get(b.part)?.kind {
-            PartKind::Move { target, .. } => Some((b, target.clone())),
+            PartKind::Move { target, .. } => Some((b.part, f(b, target))),
             _ => None,
         })
-        .map(|(b, target)| {
-            let n1 = mesh.p + 1;
-            let mut worst = 0.0f64;
-            let vs: Vec<usize> = if D == 2 { vec![0] } else { (0..=m).collect() };
-            for &kv in &vs {
-                for ku in 0..=m {
-                    let mut x = [0.0; D];
-                    for (idx, &node) in b.nodes.iter().enumerate() {
-                        let w = if D == 2 { at[ku][idx] } else { at[ku][idx % n1] * at[kv][idx / n1] };
-                        for d in 0..D {
-                            x[d] += w * mesh.nodes[node][d];
-                        }
-                    }
-                    worst = worst.max(target.distance(x));
-                }
-            }
-            worst
+        .fold(|| vec![0.0; parts.len()], |mut w, (k, d)| {
+            w[k] = f64::max(w[k], d);
+            w
         })
-        .reduce(|| 0.0, f64::max);
-    Ok(worst)
+        .reduce(|| vec![0.0; parts.len()], |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect());
+    worst
+}
+
+/// Per part, the largest distance of the boundary sampled on a grid of
+/// `samples` points per direction of each boundary element to the shape.
+fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<Vec<f64>, HighOrderError> {
+    let basis = Basis1d::new(mesh.p, mesh.spacing)?;
+    let m = samples.max(2);
+    let at: Vec<Vec<f64>> = (0..=m).map(|k| basis.eval(k as f64 / m as f64).0).collect();
+    let n1 = mesh.p + 1;
+    Ok(per_part(mesh, parts, |b, target| {
+        let mut worst = 0.0f64;
+        let vs: Vec<usize> = if D == 2 { vec![0] } else { (0..=m).collect() };
+        for &kv in &vs {
+            for ku in 0..=m {
+                let mut x = [0.0; D];
+                for (idx, &node) in b.nodes.iter().enumerate() {
+                    let w = if D == 2 { at[ku][idx] } else { at[ku][idx % n1] * at[kv][idx / n1] };
+                    for d in 0..D {
+                        x[d] += w * mesh.nodes[node][d];
+                    }
+                }
+                worst = worst.max(target.distance(x));
+            }
+        }
+        worst
+    }))
 }
 
 #[cfg(test)]

@@ -65,6 +65,14 @@ pub struct Agreement {
 /// The real Gmsh opens `file`, finds `count` elements of type `ty`, finds
 /// every one valid by minDetJac, and its minDetJac agrees with ours.
 pub fn gmsh_agrees<const D: usize>(file: &Path, ty: i64, count: usize) -> Agreement {
+    gmsh_agrees_within::<D>(file, ty, count, 1.5e-3)
+}
+
+/// [`gmsh_agrees`], with Gmsh's minDetJac within `shaped` (relative) of
+/// ours on elements that are not nearly degenerate. Gmsh's is a looser
+/// lower bound than ours (never above a value det J takes, checked), the
+/// more so on thin curved elements.
+pub fn gmsh_agrees_within<const D: usize>(file: &Path, ty: i64, count: usize, shaped: f64) -> Agreement {
     let g = run_checker("check_msh.py", file);
     assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
     let block = if D == 2 { &g["elements_2d"] } else { &g["elements_3d"] };
@@ -93,7 +101,7 @@ pub fn gmsh_agrees<const D: usize>(file: &Path, ty: i64, count: usize) -> Agreem
             assert!(o.min_scaled_jacobian < 0.02, "element {k}: Gmsh's minSJ {} but ours {}", gsj[k], o.min_scaled_jacobian);
         }
     }
-    assert!(a.shaped < 1.5e-3, "Gmsh's minDetJac and ours differ by {:e} relative", a.shaped);
+    assert!(a.shaped < shaped, "Gmsh's minDetJac and ours differ by {:e} relative", a.shaped);
     assert!(a.degenerate < 1e-3, "on nearly degenerate elements Gmsh's minDetJac and ours differ by {:e} of max det J", a.degenerate);
     a
 }

@@ -119,26 +119,48 @@ fn arc_h(mesh: &QuadMesh) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Elements with two boundary facets on the arc: the straight-angle corner.
+fn straight_angle_cells(mesh: &deformesh::mesh::CurvedMesh<2>) -> Vec<usize> {
+    (0..mesh.cells.len())
+        .filter(|&c| mesh.boundary.iter().filter(|b| b.nodes.iter().all(|n| mesh.cells[c].contains(n))).count() >= 2)
+        .collect()
+}
+
 #[test]
 fn boundary_error_converges_like_h_to_the_p_plus_1() {
     // Algorithm 2 with the paper's Dirichlet data (each new arc node goes
-    // along its ray onto the circle). h is the longest coarse arc edge:
+    // along its ray onto the circle) and with sliding, settled at the end
+    // (the default). h is the longest coarse arc edge:
     // Algorithm 1's straight-angle corner at 45° makes the two edges there
     // longer than 1/n relative to the rest, so h does not halve with n.
-    let meshes: Vec<(QuadMesh, Vec<BoundaryPart<2>>)> = [8, 16, 32].iter().map(|&n| quarter_disk(n, MoveMode::Dirichlet)).collect();
-    for p in 2..=4 {
-        let errs: Vec<(f64, f64)> = meshes
-            .iter()
-            .map(|(m, parts)| {
-                let c = curve(m, parts, &CurveOptions { order: p, samples: 32, ..Default::default() }).unwrap();
-                assert!(c.quality.boundary_node_distance < 1e-12);
-                (arc_h(m), c.quality.boundary_sample_distance)
-            })
-            .collect();
-        for w in errs.windows(2) {
-            let rate = (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln();
-            eprintln!("p = {p}: h {:.4} → {:.4}, error {:.3e} → {:.3e}, observed order {rate:.2}", w[0].0, w[1].0, w[0].1, w[1].1);
-            assert!(rate >= p as f64 + 1.0 - 0.5, "p = {p}: observed order {rate:.2}");
+    // That corner cell has two sides on the arc, det J = 0 at their common
+    // vertex in the exact geometry, and its sign in the curved cell is
+    // decided by O(h^p) tilts of the two sides: at p = 3 settled nodes
+    // leave it invalid, so settling leaves its nodes where sliding put them
+    // (the only demoted cell), and its sides set the error: order 3.41 –
+    // 3.47 measured there, against 4.0 with Dirichlet data.
+    for mode in [MoveMode::Dirichlet, MoveMode::Sliding] {
+        let meshes: Vec<(QuadMesh, Vec<BoundaryPart<2>>)> = [8, 16, 32].iter().map(|&n| quarter_disk(n, mode)).collect();
+        for p in 2..=4 {
+            let errs: Vec<(f64, f64)> = meshes
+                .iter()
+                .map(|(m, parts)| {
+                    let c = curve(m, parts, &CurveOptions { order: p, samples: 32, ..Default::default() }).unwrap();
+                    assert!(c.quality.boundary_node_distance < 1e-12);
+                    if mode == MoveMode::Sliding {
+                        assert!(c.quality.settling.applied, "{:?}", c.quality.settling);
+                        let corner = straight_angle_cells(&c.mesh);
+                        assert!(c.quality.settling.demoted_elements.iter().all(|e| corner.contains(e)), "{:?} against {corner:?}", c.quality.settling);
+                    }
+                    (arc_h(m), c.quality.boundary_sample_distance)
+                })
+                .collect();
+            for w in errs.windows(2) {
+                let rate = (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln();
+                eprintln!("{mode:?}, p = {p}: h {:.4} → {:.4}, error {:.3e} → {:.3e}, observed order {rate:.2}", w[0].0, w[1].0, w[0].1, w[1].1);
+                let least = if mode == MoveMode::Sliding && p == 3 { 3.35 } else { p as f64 + 0.5 };
+                assert!(rate >= least, "{mode:?}, p = {p}: observed order {rate:.2}");
+            }
         }
     }
 }
