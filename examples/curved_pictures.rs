@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use deformesh::highorder::{hex_map, quad_map, Spacing};
 use deformesh::mesh::CurvedMesh;
 use deformesh::render::{
-    render_curved_hex, render_curved_quads, write_png, ClipPlane, RenderOptions, RenderOptions3,
+    render_hexes, render_quads, write_png, ClipPlane, RenderOptions, RenderOptions3,
 };
 
 /// The quarter annulus `1 ≤ r ≤ 2`, `0 ≤ θ ≤ π/2`: `n[0]` cells around,
@@ -88,7 +88,7 @@ fn main() {
     save(
         &dir,
         "curved_annulus.png",
-        &render_curved_quads(&annulus, &values, &opts).expect("render"),
+        &render_quads(&annulus, &values, &opts).expect("render"),
     );
 
     let block = curved_top_block(3, [4, 2, 2]);
@@ -106,7 +106,7 @@ fn main() {
     save(
         &dir,
         "curved_block.png",
-        &render_curved_hex(&block, &values, &opts).expect("render"),
+        &render_hexes(&block, &values, &opts).expect("render"),
     );
     let cut = RenderOptions3 {
         clip: Some(ClipPlane {
@@ -119,6 +119,6 @@ fn main() {
     save(
         &dir,
         "curved_block_cut.png",
-        &render_curved_hex(&block, &values, &cut).expect("render"),
+        &render_hexes(&block, &values, &cut).expect("render"),
     );
 }

@@ -5,8 +5,8 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-use deformesh::mesh::HexMesh;
-use deformesh::render::{render_hex, write_png, Camera, ClipPlane, RenderOptions3};
+use deformesh::mesh::{CurvedMesh, HexMesh};
+use deformesh::render::{render_hexes, write_png, Camera, ClipPlane, RenderOptions3};
 
 /// The unit brick with its top bulged up (up to 30 %) and sheared a little,
 /// like a mesh after a deformation step.
@@ -52,7 +52,7 @@ fn l_block() -> HexMesh {
 }
 
 fn save(dir: &Path, name: &str, mesh: &HexMesh, values: &[f64], opts: &RenderOptions3) {
-    let pixmap = render_hex(mesh, values, opts).expect("render");
+    let pixmap = render_hexes(&CurvedMesh::from_hexes(mesh), values, opts).expect("render");
     let path = dir.join(name);
     write_png(&path, &pixmap).expect("write");
     println!("{}", path.display());

@@ -6,8 +6,8 @@
 
 use std::path::PathBuf;
 
-use deformesh::mesh::QuadMesh;
-use deformesh::render::{render_mesh, write_gif, write_png, RenderOptions};
+use deformesh::mesh::{CurvedMesh, QuadMesh};
+use deformesh::render::{render_quads, write_gif, write_png, RenderOptions};
 
 /// Bends the unit square by amount `s` (0 = identity).
 fn bend(p: [f64; 2], s: f64) -> [f64; 2] {
@@ -48,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     write_png(
         &out.join("render_demo.png"),
-        &render_mesh(&mesh, &values(&mesh), &opts)?,
+        &render_quads(&CurvedMesh::from_quads(&mesh), &values(&mesh), &opts)?,
     )?;
 
     // Frames share bounds and range so they line up and colours compare.
@@ -64,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let t = i as f64 / 5.0;
             let m = bent(t);
             let v: Vec<f64> = values(&m).iter().map(|v| 1.0 + t * (v - 1.0)).collect();
-            render_mesh(&m, &v, &frame_opts(t))
+            render_quads(&CurvedMesh::from_quads(&m), &v, &frame_opts(t))
         })
         .collect::<Result<Vec<_>, _>>()?;
     write_gif(&out.join("render_demo.gif"), &frames, 30)?;

@@ -16,8 +16,7 @@ use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
 use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
 use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
-use crate::render::{render_curved_hex, render_curved_quads};
-use crate::render::{ColourMap, gif_bytes, png_bytes, render_hex, render_mesh, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
+use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -268,16 +267,14 @@ impl Outputs<2, 4> for QuadMesh {
         vtu_string(self, cell_data, &[])
     }
     fn draw(&self, nodes: &[Point2], values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
-        let m = QuadMesh { nodes: nodes.to_vec(), ..self.clone() };
-        let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
-        render_mesh(&m, values, &opts)
+        Self::draw_curved(&CurvedMesh { nodes: nodes.to_vec(), ..CurvedMesh::from_quads(self) }, values, look)
     }
     fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
         curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
     }
     fn draw_curved(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
         let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
-        render_curved_quads(mesh, values, &opts)
+        render_quads(mesh, values, &opts)
     }
 }
 
@@ -303,14 +300,13 @@ impl Outputs<3, 8> for HexMesh {
         hex_vtu_string(self, cell_data, &[])
     }
     fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        let m = HexMesh { nodes: nodes.to_vec(), ..self.clone() };
-        render_hex(&m, values, &options3(look))
+        Self::draw_curved(&CurvedMesh { nodes: nodes.to_vec(), ..CurvedMesh::from_hexes(self) }, values, look)
     }
     fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
         curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
     }
     fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        render_curved_hex(mesh, values, &options3(look))
+        render_hexes(mesh, values, &options3(look))
     }
 }
 

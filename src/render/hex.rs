@@ -1,9 +1,15 @@
-//! Pictures of a hexahedral mesh: its boundary surface, each face filled
-//! with the colour of its cell's value and shaded by a light from the
-//! camera's upper left, thin cell edges, a dark silhouette, the colour bar
-//! and a title, as in the 2D pictures.
+//! The 3D plan: the boundary surface of a hex mesh of any order, each face
+//! filled with the colour of its cell's value and shaded by a light from
+//! the camera's upper left, with its border drawn as the cell edges, a dark
+//! silhouette, the colour bar and a title, as in the 2D pictures.
 //!
-//! Hidden surfaces are removed with a z-buffer (two triangles per face,
+//! Each boundary face is an `m × m` grid of small flat quads on the true
+//! face (`m = 1` at `p = 1`, whose faces are bilinear, `m = `
+//! [`SUBQUADS_PER_ORDER`]` · p` above), shaded by normals interpolated
+//! from the grid points; the edge lines follow the border of the whole
+//! face, so the sub-quads do not show.
+//!
+//! Hidden surfaces are removed with a z-buffer (two triangles per quad,
 //! rasterised by our own code), not by sorting faces, because sorting fails
 //! on concave meshes. The picture is rasterised at [`SUPERSAMPLE`]× the
 //! resolution each way and averaged down, which anti-aliases both the
@@ -12,8 +18,8 @@
 //! is darkened), so they take part in the depth test exactly like the
 //! faces and hidden edges never show.
 //!
-//! With a [`ClipPlane`], cells whose centroid lies on the positive side of
-//! the plane are dropped and the surface of the kept cells is drawn, so
+//! With a [`ClipPlane`], cells whose corner mean lies on the positive side
+//! of the plane are dropped and the surface of the kept cells is drawn, so
 //! the faces between kept and dropped cells show the inside.
 
 pub(crate) mod raster;
@@ -24,22 +30,26 @@ pub(crate) mod view;
 
 use tiny_skia::Pixmap;
 
-use super::check_values;
-use super::colour::ColourMap;
-use super::layout::Layout;
-use super::{canvas, decorate, draw, legend, resolve_range, Legend, RenderError};
-use crate::mesh::HexMesh;
-use raster::{Canvas, EdgeStyle};
-use view::View;
+use super::{basis_table, bounding_box, pieces, validate, ColourMap, Frame, RenderError, Style};
+use crate::mesh::element::order::HEX_CORNERS;
+use crate::mesh::CurvedMesh;
+use raster::{distance_to_segment, edge_blend, Canvas, EdgeStyle};
+use surface::{surface_faces, HEX_FACES};
+use view::{shade_colour, View};
 
 /// Each pixel is rasterised as `SUPERSAMPLE × SUPERSAMPLE` samples: 3 gives
 /// smooth outlines and sub-pixel edge lines at a modest memory cost
 /// (about 70 bytes per output pixel).
-pub(crate) const SUPERSAMPLE: u32 = 3;
+const SUPERSAMPLE: u32 = 3;
 
 /// Width of the silhouette line in output pixels (inside the outline), at
 /// a 900-pixel-wide image; it scales with the image like the 2D boundary.
-pub(crate) const OUTLINE_PX: f64 = 1.3;
+const OUTLINE_PX: f64 = 1.3;
+
+/// Sub-quads per face side and per unit of order (for `p > 1`): a
+/// degree-`p` face needs a few flat pieces per polynomial degree to look
+/// smooth both in outline and in shading.
+const SUBQUADS_PER_ORDER: usize = 3;
 
 /// Where the camera looks from. It always looks at the centre of the
 /// framed box, with the z axis pointing up in the picture.
@@ -70,8 +80,8 @@ impl Default for Camera {
     }
 }
 
-/// A plane that cuts the mesh open: cells whose centroid lies on the side
-/// the normal points to are not drawn.
+/// A plane that cuts the mesh open: cells whose centre (the mean of their
+/// eight corners) lies on the side the normal points to are not drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClipPlane {
     /// Any point on the plane.
@@ -81,7 +91,7 @@ pub struct ClipPlane {
     pub normal: [f64; 3],
 }
 
-/// What to draw and how, for [`render_hex`].
+/// What to draw and how, for [`render_hexes`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions3 {
     /// Image width in pixels (at least 200). The height follows from the
@@ -106,9 +116,10 @@ pub struct RenderOptions3 {
     /// is always drawn.
     pub draw_edges: bool,
     /// World box to frame and look at, as (lower corner, upper corner);
-    /// `None` frames the drawn cells (those the clip plane keeps). Give all
-    /// frames of an animation, or a clipped and an unclipped picture meant
-    /// to be compared, the same box and camera so they line up.
+    /// `None` frames the drawn surface (of the cells the clip plane keeps).
+    /// Give all frames of an animation, or a clipped and an unclipped
+    /// picture meant to be compared, the same box and camera so they line
+    /// up.
     pub bounds: Option<([f64; 3], [f64; 3])>,
 }
 
@@ -131,116 +142,101 @@ impl Default for RenderOptions3 {
     }
 }
 
-/// Draws the boundary surface of `mesh` (of the cells kept by the clip
-/// plane, if any), each face coloured by `cell_values` of its cell and
-/// shaded, with edges, silhouette, colour bar and title as set in `opts`.
+/// Draws the boundary surface of the hex mesh `mesh` (any order; a linear
+/// [`HexMesh`] is `CurvedMesh::from_hexes`), of the cells kept by the clip
+/// plane if any, as shaded faces coloured by `cell_values` of their cell,
+/// with each face's border drawn along its edges (if `opts.draw_edges`),
+/// plus silhouette, colour bar and title. A face is on the surface when no
+/// other kept cell has a face with the same four corner nodes; the mesh's
+/// tagged `boundary` is not used. Without `opts.bounds` the picture frames
+/// the sampled surface.
 ///
-/// Fails (never panics) if the number of values differs from the number
-/// of cells, if a value, node, bound, range, camera setting or clip plane
-/// is not finite or is degenerate, if a cell refers to a missing node, or
-/// if the image size is unusable. The mesh's tagged `faces` are not used:
-/// the surface is found from the cells.
-pub fn render_hex(
-    mesh: &HexMesh,
+/// Fails, never panics, on the inputs listed in [`crate::render`].
+///
+/// [`HexMesh`]: crate::mesh::HexMesh
+pub fn render_hexes(
+    mesh: &CurvedMesh<3>,
     cell_values: &[f64],
     opts: &RenderOptions3,
 ) -> Result<Pixmap, RenderError> {
-    let plan = Plan3::new(mesh, cell_values, opts)?;
-    let layout = &plan.layout;
-    let mut pixmap = canvas(layout)?;
-    draw_surface(&mut pixmap, &plan, mesh, cell_values, opts);
-    let legend = Legend { cmap: plan.cmap, range: plan.range, tick_labels: &plan.tick_labels, label: &opts.label, title: opts.title.as_deref() };
-    decorate(&mut pixmap, layout, &legend);
+    let plan = HexPlan::new(mesh, cell_values, opts)?;
+    let mut pixmap = plan.frame.canvas()?;
+    draw_patches(&mut pixmap, &plan, cell_values, opts.draw_edges);
+    plan.frame.decorate(&mut pixmap);
     Ok(pixmap)
 }
 
-/// Everything decided before drawing: validated inputs turned into a
-/// camera, colour range, colour map, tick labels and layout.
-struct Plan3 {
-    view: View,
-    /// Which cells are drawn (see [`kept_cells`]).
-    kept: Vec<bool>,
-    range: (f64, f64),
-    cmap: ColourMap,
-    tick_labels: Vec<String>,
-    layout: Layout,
+/// One drawn face: the face sampled on an `(m+1) × (m+1)` grid.
+struct Patch {
+    /// The cell it belongs to (whose value colours it).
+    cell: usize,
+    /// World points, index `k + (m+1) l` for face parameters
+    /// `(k/m, l/m)`; the grid's border is the face's border.
+    points: Vec<[f64; 3]>,
 }
 
-impl Plan3 {
-    fn new(mesh: &HexMesh, values: &[f64], opts: &RenderOptions3) -> Result<Plan3, RenderError> {
+/// Everything decided before drawing a hex mesh.
+struct HexPlan {
+    frame: Frame,
+    view: View,
+    /// Sub-quads per face side.
+    m: usize,
+    /// The surface of the kept cells.
+    patches: Vec<Patch>,
+}
+
+impl HexPlan {
+    fn new(
+        mesh: &CurvedMesh<3>,
+        values: &[f64],
+        opts: &RenderOptions3,
+    ) -> Result<HexPlan, RenderError> {
         validate(mesh, values)?;
         if let Some(clip) = &opts.clip {
             validate_clip(clip)?;
         }
-        let range = resolve_range(values, opts.range)?;
+        let m = pieces(mesh.p, SUBQUADS_PER_ORDER);
         let kept = kept_cells(mesh, opts.clip.as_ref());
-        let framed = match opts.bounds {
+        let patches = surface_patches(mesh, &kept, m);
+        let framed: Vec<[f64; 3]> = match opts.bounds {
             Some((lo, hi)) => box_corners(lo, hi).to_vec(),
-            None => framed_nodes(mesh, &kept),
+            // The sampled surface, not the nodes: a curved face may bulge
+            // beyond its nodes. With nothing kept, frame the whole mesh.
+            None if patches.is_empty() => mesh.nodes.clone(),
+            None => patches
+                .iter()
+                .flat_map(|f| f.points.iter().copied())
+                .collect(),
         };
-        let (lo, hi) = resolve_box(&framed, opts.bounds)?;
+        let (lo, hi) = opts.bounds.unwrap_or_else(|| bounding_box(&framed));
+        // Finite, not reversed, and not a single point (a flat box is
+        // fine: it can still be seen from the side).
+        let ordered = (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && hi[k] >= lo[k]);
+        if !(ordered && (0..3).any(|k| hi[k] > lo[k])) {
+            return Err(RenderError::InvalidBounds3 { lo, hi });
+        }
         let view = View::new(&opts.camera, lo, hi)?;
-        let screen = screen_bounds(&view, &framed);
-        let cmap = opts.colour_map.unwrap_or_else(|| ColourMap::auto(range));
-        let tick_labels = legend::format_ticks(&legend::tick_values(range));
-        let layout = Layout::new(
-            opts.width,
-            screen,
-            opts.title.is_some(),
-            &opts.label,
-            &tick_labels,
-        )?;
-        Ok(Plan3 {
+        let frame = Frame::new(values, style!(opts), screen_bounds(&view, &framed))?;
+        Ok(HexPlan {
+            frame,
             view,
-            kept,
-            range,
-            cmap,
-            tick_labels,
-            layout,
+            m,
+            patches,
         })
     }
 
-    /// The image position of world point `p` (see [`to_image`]).
+    /// The image position (pixels, x right, y down) and depth key (smaller
+    /// is nearer) of world point `p`, or `None` if it is behind the eye.
     fn to_image(&self, p: [f64; 3]) -> Option<[f64; 3]> {
-        to_image(&self.view, &self.layout, p)
-    }
-}
-
-/// The image position (pixels, x right, y down) and depth key (smaller is
-/// nearer) of world point `p` seen by `view` in `layout`, or `None` if it
-/// is behind the eye.
-pub(crate) fn to_image(view: &View, layout: &Layout, p: [f64; 3]) -> Option<[f64; 3]> {
-    let [x, y, depth] = view.project(p)?;
-    let (px, py) = layout.to_px([x, y]);
-    Some([px as f64, py as f64, depth])
-}
-
-/// Checks that values match cells and everything is finite and in range,
-/// so drawing cannot index out of bounds or produce garbage.
-fn validate(mesh: &HexMesh, values: &[f64]) -> Result<(), RenderError> {
-    check_values(values, mesh.cells.len())?;
-    if let Some(index) = mesh
-        .nodes
-        .iter()
-        .position(|p| !p.iter().all(|x| x.is_finite()))
-    {
-        return Err(RenderError::NonFiniteNode { index });
-    }
-    let nodes = mesh.nodes.len();
-    let bad_cell = mesh
-        .cells
-        .iter()
-        .enumerate()
-        .find_map(|(cell, c)| c.iter().find(|&&n| n >= nodes).map(|&node| (cell, node)));
-    match bad_cell {
-        Some((cell, node)) => Err(RenderError::BadNodeIndex { cell, node, nodes }),
-        None => Ok(()),
+        let [x, y, depth] = self.view.project(p)?;
+        let (px, py) = self.frame.layout.to_px([x, y]);
+        Some([px as f64, py as f64, depth])
     }
 }
 
 /// A clip plane needs a finite point and a finite, non-zero normal, or
 /// the side test would be meaningless.
-pub(crate) fn validate_clip(clip: &ClipPlane) -> Result<(), RenderError> {
+fn validate_clip(clip: &ClipPlane) -> Result<(), RenderError> {
     let finite = clip.point.iter().chain(&clip.normal).all(|x| x.is_finite());
     if finite && view::dot(clip.normal, clip.normal) > 0.0 {
         Ok(())
@@ -252,61 +248,17 @@ pub(crate) fn validate_clip(clip: &ClipPlane) -> Result<(), RenderError> {
     }
 }
 
-/// The nodes to frame when no box is given: those of the kept cells, so a
-/// clipped mesh fills the picture; all nodes if no cell is kept.
-fn framed_nodes(mesh: &HexMesh, kept: &[bool]) -> Vec<[f64; 3]> {
-    let mut used = vec![false; mesh.nodes.len()];
-    for (cell, _) in mesh.cells.iter().zip(kept).filter(|(_, &k)| k) {
-        for &n in cell {
-            used[n] = true;
-        }
-    }
-    let nodes = mesh.nodes.iter().zip(&used).filter(|(_, &u)| u);
-    let framed: Vec<[f64; 3]> = nodes.map(|(&p, _)| p).collect();
-    if framed.is_empty() {
-        mesh.nodes.clone()
-    } else {
-        framed
-    }
-}
-
 /// The eight corners of the box `lo..hi`.
-pub(crate) fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> [[f64; 3]; 8] {
+fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> [[f64; 3]; 8] {
     std::array::from_fn(|i| std::array::from_fn(|k| if i >> k & 1 == 0 { lo[k] } else { hi[k] }))
-}
-
-/// The world box: the given one, or the bounding box of `points`; it must
-/// be finite, not reversed, and not a single point (a flat box is fine: it
-/// can still be seen from the side).
-pub(crate) fn resolve_box(
-    points: &[[f64; 3]],
-    given: Option<([f64; 3], [f64; 3])>,
-) -> Result<([f64; 3], [f64; 3]), RenderError> {
-    let (lo, hi) = given.unwrap_or_else(|| {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in points {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        (lo, hi)
-    });
-    let ordered = (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && hi[k] >= lo[k]);
-    if ordered && (0..3).any(|k| hi[k] > lo[k]) {
-        Ok((lo, hi))
-    } else {
-        Err(RenderError::InvalidBounds3 { lo, hi })
-    }
 }
 
 /// The box in screen coordinates (world units on the camera's right and
 /// up axes) that the plot area shows: the projection of `points` (the
-/// given box's corners, or the framed nodes, a tighter frame than their
+/// given box's corners, or the framed surface, a tighter frame than their
 /// bounding box's corners). A side of zero length (a flat mesh seen
 /// edge-on) is widened so the layout still has an area to map to.
-pub(crate) fn screen_bounds(view: &View, points: &[[f64; 3]]) -> ([f64; 2], [f64; 2]) {
+fn screen_bounds(view: &View, points: &[[f64; 3]]) -> ([f64; 2], [f64; 2]) {
     let mut a = [f64::INFINITY; 2];
     let mut b = [f64::NEG_INFINITY; 2];
     // Every framing point is inside the bounding sphere, so in front of
@@ -324,113 +276,287 @@ pub(crate) fn screen_bounds(view: &View, points: &[[f64; 3]]) -> ([f64; 2], [f64
     (a, b)
 }
 
-/// Rasterises the visible surface into a supersampled z-buffer over the
-/// plot area and copies the averaged result into `pixmap`.
-fn draw_surface(
-    pixmap: &mut Pixmap,
-    plan: &Plan3,
-    mesh: &HexMesh,
-    values: &[f64],
-    opts: &RenderOptions3,
-) {
-    let region = plot_region(&plan.layout);
-    let ss = SUPERSAMPLE;
-    let mut canvas = Canvas::new(region[2] * ss, region[3] * ss);
-    let faces = surface::surface_faces(&mesh.cells, &plan.kept);
-    let edges = edge_style(plan, mesh, &faces, opts.draw_edges);
-    // Project every node once, straight into supersampled canvas pixels.
-    let to_canvas = |p: [f64; 3]| {
-        let [x, y, depth] = plan.to_image(p)?;
-        let s = ss as f64;
-        Some([
-            (x - region[0] as f64) * s,
-            (y - region[1] as f64) * s,
-            depth,
-        ])
-    };
-    let projected: Vec<Option<[f64; 3]>> = mesh.nodes.iter().map(|&p| to_canvas(p)).collect();
-    for face in &faces {
-        // A face with a node behind the eye is skipped rather than
-        // clipped: only possible when a given box cuts through the mesh.
-        let Some(corners) = face
-            .nodes
-            .iter()
-            .map(|&n| projected[n])
-            .collect::<Option<Vec<_>>>()
-        else {
-            continue;
-        };
-        let world = face.nodes.map(|n| mesh.nodes[n]);
-        let base = plan.cmap.colour(values[face.cell], plan.range);
-        let colour = plan.view.shade(base, &world);
-        canvas.fill_quad(
-            &[corners[0], corners[1], corners[2], corners[3]],
-            colour,
-            edges,
-        );
-    }
-    let res = (plan.layout.width as f64 / 900.0).max(0.75);
-    let outline = (OUTLINE_PX * res * ss as f64).round() as usize;
-    canvas.outline(outline.max(1), raster::INK, 0.9);
-    canvas.blit(pixmap, region[0], region[1], ss);
-}
-
-/// The pixel rectangle (x, y, w, h) the surface may be drawn in: the plot
-/// area widened by half a margin, as for 2D pictures, so the silhouette is
-/// not cut while a mesh outside a user-given box stays off the colour bar.
-pub(crate) fn plot_region(layout: &Layout) -> [u32; 4] {
-    let pad = 0.5 * layout.margin;
-    let [x, y, w, h] = layout.plot;
-    let x0 = (x - pad).floor().clamp(0.0, layout.width as f64) as u32;
-    let y0 = (y - pad).floor().clamp(0.0, layout.height as f64) as u32;
-    let x1 = (x + w + pad).ceil().clamp(x0 as f64, layout.width as f64) as u32;
-    let y1 = (y + h + pad).ceil().clamp(y0 as f64, layout.height as f64) as u32;
-    [x0, y0, x1 - x0, y1 - y0]
-}
-
-/// Which cells are drawn: all, or those whose centroid is not on the
-/// positive side of the clip plane (the centroid, not the nodes, so a cell
-/// cut by the plane is kept or dropped whole).
-fn kept_cells(mesh: &HexMesh, clip: Option<&ClipPlane>) -> Vec<bool> {
+/// Which cells are drawn: all, or those whose centre (the mean of the
+/// eight corner nodes, whatever the order, so a curved mesh and its
+/// straight-sided version lose the same cells) is not on the positive side
+/// of the clip plane; a cell cut by the plane is kept or dropped whole.
+fn kept_cells(mesh: &CurvedMesh<3>, clip: Option<&ClipPlane>) -> Vec<bool> {
     let Some(clip) = clip else {
         return vec![true; mesh.cells.len()];
     };
     mesh.cells
         .iter()
         .map(|cell| {
-            let mut c = [0.0; 3];
-            for &n in cell {
-                c = view::add(c, view::scale(mesh.nodes[n], 0.125));
-            }
+            let corners = corner_nodes(cell, mesh.p);
+            let c = corners.iter().fold([0.0; 3], |c, &n| {
+                view::add(c, view::scale(mesh.nodes[n], 0.125))
+            });
             view::dot(view::sub(c, clip.point), clip.normal) <= 0.0
         })
         .collect()
 }
 
-/// The style of the cell edges: like 2D interior edges, chosen from the
-/// median face size in pixels (robust to a few tiny or huge faces), and
-/// none if edges are off or faces too small to show them.
-fn edge_style(
-    plan: &Plan3,
-    mesh: &HexMesh,
-    faces: &[surface::SurfaceFace],
-    wanted: bool,
-) -> Option<EdgeStyle> {
-    if !wanted || faces.is_empty() {
-        return None;
+/// The eight corner nodes of a tensor-ordered order-`p` hex, in the local
+/// numbering of [`HEX_CORNERS`].
+fn corner_nodes(cell: &[usize], p: usize) -> [usize; 8] {
+    let q = p + 1;
+    HEX_CORNERS.map(|[a, b, c]| cell[p * (a + q * b + q * q * c)])
+}
+
+/// The sampled boundary faces of the kept cells: faces found by their
+/// corner nodes (shared by no other kept cell), in cell order.
+fn surface_patches(mesh: &CurvedMesh<3>, kept: &[bool], m: usize) -> Vec<Patch> {
+    let corners: Vec<[usize; 8]> = mesh.cells.iter().map(|c| corner_nodes(c, mesh.p)).collect();
+    let table = basis_table(mesh.p, mesh.spacing, m);
+    surface_faces(&corners, kept)
+        .into_iter()
+        .filter_map(|face| {
+            // Which of the cell's six faces it is: the one whose corners
+            // are listed exactly like this.
+            let cell = &corners[face.cell];
+            let f = HEX_FACES
+                .iter()
+                .position(|l| l.map(|i| cell[i]) == face.nodes)?;
+            let points = sample_face(&mesh.cells[face.cell], &mesh.nodes, mesh.p, f, &table);
+            Some(Patch {
+                cell: face.cell,
+                points,
+            })
+        })
+        .collect()
+}
+
+/// Face `f` ([`HEX_FACES`] numbering) of the order-`p` hex with tensor-
+/// ordered nodes `cell`, sampled through the hex map on the grid of
+/// `table` (rows at `t = k / m`). The face's first corner is the grid's
+/// origin, its second lies along the grid's first axis, its fourth along
+/// the second.
+fn sample_face(
+    cell: &[usize],
+    nodes: &[[f64; 3]],
+    p: usize,
+    f: usize,
+    table: &[Vec<f64>],
+) -> Vec<[f64; 3]> {
+    let m = table.len() - 1;
+    let q = p + 1;
+    let [r0, r1, _, r3] = HEX_FACES[f].map(|i| HEX_CORNERS[i]);
+    let axis_u = (0..3)
+        .find(|&d| r1[d] != r0[d])
+        .expect("face corners differ");
+    let axis_v = (0..3)
+        .find(|&d| r3[d] != r0[d])
+        .expect("face corners differ");
+    let fixed = 3 - axis_u - axis_v;
+    // The face lies where the basis along the fixed axis is exactly the
+    // first or the last function: the face depends on its own nodes only.
+    let mut delta = vec![0.0; q];
+    delta[r0[fixed] * p] = 1.0;
+    // Along a reversed axis, face parameter k/m is reference 1 − k/m.
+    let row = |k: usize, reversed: bool| &table[if reversed { m - k } else { k }];
+    let mut points = Vec::with_capacity((m + 1) * (m + 1));
+    for l in 0..=m {
+        for k in 0..=m {
+            let mut w: [&[f64]; 3] = [&delta, &delta, &delta];
+            w[axis_u] = row(k, r0[axis_u] == 1);
+            w[axis_v] = row(l, r0[axis_v] == 1);
+            let mut x = [0.0; 3];
+            for (c, &wc) in w[2].iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                for (b, &wb) in w[1].iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                    for (a, &wa) in w[0].iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                        let y = nodes[cell[a + q * b + q * q * c]];
+                        x = view::add(x, view::scale(y, wa * wb * wc));
+                    }
+                }
+            }
+            points.push(x);
+        }
     }
-    // The world size of the face times the scale at the centre of the
-    // view: unlike projected areas, this does not vanish for faces seen
-    // edge-on, which would make the median meaningless in axis views.
-    let mut sizes: Vec<f64> = faces
+    points
+}
+
+/// Rasterises the surface into a supersampled z-buffer over the plot
+/// region and copies the averaged result into `pixmap`.
+fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges: bool) {
+    let layout = &plan.frame.layout;
+    let region = layout.plot_region();
+    let ss = SUPERSAMPLE as f64;
+    let mut canvas = Canvas::new(region[2] * SUPERSAMPLE, region[3] * SUPERSAMPLE);
+    let edges = if draw_edges { edge_style(plan) } else { None };
+    let m = plan.m;
+    let at = |k: usize, l: usize| k + (m + 1) * l;
+    for patch in &plan.patches {
+        // A face with a point behind the eye is skipped rather than
+        // clipped: only possible when a given box cuts through the mesh.
+        let Some(px) = patch
+            .points
+            .iter()
+            .map(|&p| {
+                let [x, y, depth] = plan.to_image(p)?;
+                Some([
+                    (x - region[0] as f64) * ss,
+                    (y - region[1] as f64) * ss,
+                    depth,
+                ])
+            })
+            .collect::<Option<Vec<[f64; 3]>>>()
+        else {
+            continue;
+        };
+        let normals = grid_normals(&patch.points, m);
+        let border: Vec<_> = face_border(m).map(|[a, b]| [px[a], px[b]]).collect();
+        let base = plan.frame.colour(values[patch.cell]);
+        for l in 0..m {
+            for k in 0..m {
+                let ids = [at(k, l), at(k + 1, l), at(k + 1, l + 1), at(k, l + 1)];
+                let light = sub_quad_light(plan, &patch.points, &normals, ids);
+                let quad = ids.map(|i| px[i]);
+                let near =
+                    edges.map(|style| nearby_segments(&border, &quad, style.half_width + 1.0));
+                for t in [[0, 1, 2], [0, 2, 3]] {
+                    let tri = t.map(|v| quad[v]);
+                    let lit = t.map(|v| light[v]);
+                    let paint = |x: f64, y: f64| {
+                        let colour = shade_colour(base, interpolate(&tri, lit, x, y));
+                        match (edges, &near) {
+                            (Some(style), Some(segs)) if !segs.is_empty() => {
+                                let d = segs
+                                    .iter()
+                                    .map(|[a, b]| distance_to_segment(*a, *b, x, y))
+                                    .fold(f64::INFINITY, f64::min);
+                                edge_blend(colour, style, d)
+                            }
+                            _ => colour,
+                        }
+                    };
+                    canvas.fill_triangle(tri, &paint);
+                }
+            }
+        }
+    }
+    let outline = (OUTLINE_PX * layout.res() as f64 * ss).round() as usize;
+    canvas.outline(outline.max(1), raster::INK, 0.9);
+    canvas.blit(pixmap, region[0], region[1], SUPERSAMPLE);
+}
+
+/// Unit normals of the sampled face at its grid points, from central
+/// differences (one-sided on the border), all on the same side of the
+/// face. Shading with these, interpolated over each sub-quad, makes a
+/// curved face look smooth where flat sub-quads would show as facets.
+fn grid_normals(points: &[[f64; 3]], m: usize) -> Vec<[f64; 3]> {
+    let at = |k: usize, l: usize| points[k + (m + 1) * l];
+    let mut normals = Vec::with_capacity(points.len());
+    for l in 0..=m {
+        for k in 0..=m {
+            let du = view::sub(at((k + 1).min(m), l), at(k.saturating_sub(1), l));
+            let dv = view::sub(at(k, (l + 1).min(m)), at(k, l.saturating_sub(1)));
+            normals.push(view::normalise(view::cross(du, dv)));
+        }
+    }
+    normals
+}
+
+/// The light factor at the four corners `ids` of a sub-quad: its corner
+/// normals, turned towards the viewer together when the sub-quad faces
+/// away (two-sided lighting), so faces of inverted cells and inner faces
+/// exposed by clipping are lit like any other.
+fn sub_quad_light(
+    plan: &HexPlan,
+    points: &[[f64; 3]],
+    normals: &[[f64; 3]],
+    ids: [usize; 4],
+) -> [f64; 4] {
+    let world = ids.map(|i| points[i]);
+    let centre = view::scale(
+        view::add(view::add(world[0], world[1]), view::add(world[2], world[3])),
+        0.25,
+    );
+    let away = view::dot(view::quad_normal(&world), plan.view.to_eye(centre)) < 0.0;
+    // Corner normals point to the same side as the sub-quad's own normal
+    // (both follow the grid's orientation), so one flip serves all four.
+    ids.map(|i| {
+        let n = if away {
+            view::scale(normals[i], -1.0)
+        } else {
+            normals[i]
+        };
+        plan.view.light_factor(n)
+    })
+}
+
+/// The value at (x, y) of the linear function on triangle `tri` (screen
+/// positions) taking `values` at its corners; clamped to the corner
+/// values' range, since samples at the inclusive edges may lie a hair
+/// outside.
+fn interpolate(tri: &[[f64; 3]; 3], values: [f64; 3], x: f64, y: f64) -> f64 {
+    let orient = |a: [f64; 3], b: [f64; 3]| (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+    let area = (tri[1][0] - tri[0][0]) * (tri[2][1] - tri[0][1])
+        - (tri[1][1] - tri[0][1]) * (tri[2][0] - tri[0][0]);
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    // The rasteriser skips degenerate triangles; this only guards the
+    // division.
+    if area.abs() < 1e-12 {
+        return lo;
+    }
+    let w = [
+        orient(tri[1], tri[2]) / area,
+        orient(tri[2], tri[0]) / area,
+        orient(tri[0], tri[1]) / area,
+    ];
+    (w[0] * values[0] + w[1] * values[1] + w[2] * values[2]).clamp(lo, hi)
+}
+
+/// The grid-index pairs of the segments around the border of an
+/// `m × m` patch.
+fn face_border(m: usize) -> impl Iterator<Item = [usize; 2]> {
+    let at = move |k: usize, l: usize| k + (m + 1) * l;
+    (0..m).flat_map(move |i| {
+        [
+            [at(i, 0), at(i + 1, 0)],
+            [at(m, i), at(m, i + 1)],
+            [at(i, m), at(i + 1, m)],
+            [at(0, i), at(0, i + 1)],
+        ]
+    })
+}
+
+/// The border segments that come within `reach` samples of the bounding
+/// box of `quad`: the only ones that can darken its samples. Taken from the
+/// whole border, not just the quad's own sides, because small faces have
+/// sub-quads narrower than the edge line.
+fn nearby_segments(
+    border: &[[[f64; 3]; 2]],
+    quad: &[[f64; 3]; 4],
+    reach: f64,
+) -> Vec<[[f64; 3]; 2]> {
+    let lo = |k: usize| quad.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min) - reach;
+    let hi = |k: usize| quad.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max) + reach;
+    let (x0, x1, y0, y1) = (lo(0), hi(0), lo(1), hi(1));
+    border
         .iter()
-        .map(|f| view::quad_area(&f.nodes.map(|n| mesh.nodes[n])).sqrt())
-        .collect();
-    let mid = sizes.len() / 2;
-    let (_, median, _) = sizes.select_nth_unstable_by(mid, f64::total_cmp);
-    let face_px = *median * plan.layout.scale();
-    let res = (plan.layout.width as f32 / 900.0).max(0.75);
-    let (width, alpha) = draw::interior_style(face_px, res)?;
+        .filter(|[a, b]| {
+            a[0].max(b[0]) >= x0
+                && a[0].min(b[0]) <= x1
+                && a[1].max(b[1]) >= y0
+                && a[1].min(b[1]) <= y1
+        })
+        .copied()
+        .collect()
+}
+
+/// The style of the face borders, like the 2D cell edges: from the median
+/// face size in pixels (its corners' world size times the scale, which
+/// does not vanish for faces seen edge-on, as projected areas would in
+/// axis views).
+fn edge_style(plan: &HexPlan) -> Option<EdgeStyle> {
+    let m = plan.m;
+    let corners = [0, m, (m + 1) * (m + 1) - 1, (m + 1) * m];
+    let sizes = plan
+        .patches
+        .iter()
+        .map(|f| view::quad_area(&corners.map(|i| f.points[i])).sqrt());
+    let (width, alpha) = plan.frame.edge_style(sizes.collect()).1?;
     Some(EdgeStyle {
         half_width: 0.5 * width as f64 * SUPERSAMPLE as f64,
         alpha,

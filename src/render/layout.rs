@@ -141,6 +141,27 @@ impl Layout {
         self.px_per_unit
     }
 
+    /// How much wider lines are than at the reference width of 900 pixels
+    /// (at least 0.75, so small pictures keep visible lines).
+    pub fn res(&self) -> f32 {
+        (self.width as f32 / 900.0).max(0.75)
+    }
+
+    /// The pixel rectangle (x, y, w, h) the mesh may be drawn in: the plot
+    /// area widened by half a margin, so a boundary or silhouette on the
+    /// frame is not cut while a mesh outside a user-given box stays off
+    /// the colour bar.
+    pub fn plot_region(&self) -> [u32; 4] {
+        let pad = 0.5 * self.margin;
+        let [x, y, w, h] = self.plot;
+        let (width, height) = (self.width as f64, self.height as f64);
+        let x0 = (x - pad).floor().clamp(0.0, width) as u32;
+        let y0 = (y - pad).floor().clamp(0.0, height) as u32;
+        let x1 = (x + w + pad).ceil().clamp(x0 as f64, width) as u32;
+        let y1 = (y + h + pad).ceil().clamp(y0 as f64, height) as u32;
+        [x0, y0, x1 - x0, y1 - y0]
+    }
+
     /// Pixel row of the bar showing fraction `t` of the range (0 = low end
     /// at the bottom row, 1 = high end at the top row).
     pub fn bar_row(&self, t: f64) -> u32 {

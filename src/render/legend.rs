@@ -1,9 +1,10 @@
-//! The colour bar: gradient, ticks, compact tick labels and its label.
+//! What surrounds the plot: the colour bar (gradient, ticks, compact tick
+//! labels and its label) and the title.
 
 use tiny_skia::{Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 use super::colour::ColourMap;
-use super::font::draw_text;
+use super::font::{draw_text, text_width};
 use super::layout::Layout;
 use super::{ink, text_colour};
 
@@ -116,6 +117,17 @@ pub(crate) fn draw_colour_bar(
         s,
         text_colour(),
     );
+}
+
+/// The title, one font step larger than the labels, centred over the plot
+/// but kept inside the image.
+pub(crate) fn draw_title(pixmap: &mut Pixmap, layout: &Layout, title: &str) {
+    let s = layout.text_scale + 1;
+    let w = text_width(title, s) as f64;
+    let centre = layout.plot[0] + 0.5 * layout.plot[2];
+    let max_x = (layout.width as f64 - layout.margin - w).max(0.0);
+    let x = (centre - 0.5 * w).clamp(layout.margin.min(max_x), max_x);
+    draw_text(pixmap, title, x as i32, layout.title_top, s, text_colour());
 }
 
 /// One-pixel rows from the high end (top row) to the low end (bottom row).

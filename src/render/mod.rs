@@ -1,40 +1,66 @@
-//! Pictures of a mesh coloured by a per-cell value (typically J/f, the
-//! ratio of the cell's Jacobian to its target), as PNG images or animated
-//! GIFs.
+//! Pictures of a mesh of any order coloured by a per-cell value
+//! (typically J/f, the ratio of the cell's Jacobian to its target), as PNG
+//! images or animated GIFs.
 //!
-//! A picture shows the cells filled by a [`ColourMap`], thin cell edges, a
-//! thicker boundary, a vertical colour bar with five labelled ticks on the
-//! right, and an optional title on top. The y axis points up. Text uses a
-//! small built-in bitmap font ([`font`]), since tiny-skia has none.
+//! Meshes are [`CurvedMesh`]es of order `p`; a linear mesh is the case
+//! `p = 1` ([`CurvedMesh::from_quads`], [`CurvedMesh::from_hexes`]). There
+//! is one plan per dimension:
 //!
-//! Hexahedral meshes are drawn by [`render_hex`]: the shaded boundary
-//! surface seen by a [`Camera`], optionally cut open by a [`ClipPlane`],
-//! with the same colour bar and title.
+//! - [`render_quads`] fills each cell with the colour of its value over the
+//!   region bounded by its true edges, and draws thin cell edges and a
+//!   thicker boundary; the y axis points up.
+//! - [`render_hexes`] draws the shaded boundary surface seen by a
+//!   [`Camera`], optionally cut open by a [`ClipPlane`].
 //!
-//! Curved high-order meshes ([`CurvedMesh`](crate::mesh::CurvedMesh))
-//! are drawn by [`render_curved_quads`] and [`render_curved_hex`], which
-//! follow the true Lagrange edges and faces of each element.
+//! Both add a vertical colour bar with five labelled ticks on the right and
+//! an optional title on top. Text uses a small built-in bitmap font
+//! ([`font`]), since tiny-skia has none.
+//!
+//! Both check what they index or divide by and fail with a [`RenderError`],
+//! never panic, if the number of values differs from the number of cells,
+//! if a value, node, bound or range is not finite, if the order is
+//! unsupported or an element has the wrong number of nodes, if an element
+//! refers to a missing node, or if the image size is unusable; in 3D also
+//! if the camera or clip plane is degenerate.
+
+/// The [`Style`] of [`RenderOptions`] or [`RenderOptions3`], which share
+/// these fields.
+macro_rules! style {
+    ($opts:expr) => {
+        Style {
+            width: $opts.width,
+            range: $opts.range,
+            colour_map: $opts.colour_map,
+            label: &$opts.label,
+            title: $opts.title.as_deref(),
+        }
+    };
+}
 
 mod colour;
-mod curved;
-mod draw;
 mod encode;
 pub mod font;
 mod hex;
 mod layout;
 mod legend;
+mod quads;
 #[cfg(test)]
 mod tests;
 
 use tiny_skia::{Color, Pixmap};
 
 pub use colour::ColourMap;
-pub use curved::{render_curved_hex, render_curved_quads};
 pub use encode::{gif_bytes, png_bytes, write_gif, write_png};
-pub use hex::{render_hex, Camera, ClipPlane, RenderOptions3};
+pub use hex::{render_hexes, Camera, ClipPlane, RenderOptions3};
+pub use quads::{render_quads, RenderOptions};
 
-use crate::mesh::QuadMesh;
+use crate::mesh::element::{check_order, Basis1d, Spacing, MAX_ORDER};
+use crate::mesh::CurvedMesh;
 use layout::Layout;
+
+/// Cells smaller than this many pixels across get no edge lines: the lines
+/// would cover the colours.
+const MIN_CELL_PX_FOR_EDGES: f64 = 3.0;
 
 /// Colour of lines (edges, ticks, the colour-bar frame): a soft black.
 fn ink() -> Color {
@@ -163,177 +189,159 @@ pub enum RenderError {
     Io(#[from] std::io::Error),
 }
 
-/// What to draw and how.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderOptions {
-    /// Image width in pixels (at least 200). The height follows from the
-    /// aspect ratio of the bounds plus room for the title and colour bar.
-    pub width: u32,
-    /// World box to frame, as (lower-left, upper-right); `None` frames the
-    /// mesh's bounding box. Give all frames of an animation the same box so
-    /// they line up.
-    pub bounds: Option<([f64; 2], [f64; 2])>,
-    /// Colour range (low, high); `None` uses the min and max of the values.
-    /// Values outside are shown in the colour of the nearer end. Give all
-    /// frames of an animation the same range so colours compare.
-    pub range: Option<(f64, f64)>,
-    /// The colour map; `None` picks one with [`ColourMap::auto`].
-    pub colour_map: Option<ColourMap>,
-    /// Label drawn above the colour bar, e.g. "J/f".
-    pub label: String,
-    /// Title drawn at the top, e.g. "t = 0.30".
-    pub title: Option<String>,
-    /// Whether to draw the edges between cells (they are left out anyway
-    /// when cells are under about 3 pixels across). The boundary is always
-    /// drawn.
-    pub draw_edges: bool,
-}
-
-impl Default for RenderOptions {
-    /// 900 pixels wide, framing the mesh, automatic range and colour map,
-    /// labelled "J/f", no title, edges drawn.
-    fn default() -> Self {
-        RenderOptions {
-            width: 900,
-            bounds: None,
-            range: None,
-            colour_map: None,
-            label: "J/f".to_string(),
-            title: None,
-            draw_edges: true,
-        }
-    }
-}
-
-/// Draws `mesh` with cell `c` filled by the colour of `cell_values[c]`,
-/// plus edges, boundary, colour bar and title as set in `opts`.
-///
-/// Fails (never panics) if the number of values differs from the number
-/// of cells, if a value, node, bound or range is not finite, if a cell
-/// refers to a missing node, or if the image size is unusable.
-pub fn render_mesh(
-    mesh: &QuadMesh,
-    cell_values: &[f64],
-    opts: &RenderOptions,
-) -> Result<Pixmap, RenderError> {
-    let plan = Plan::new(mesh, cell_values, opts)?;
-    let layout = &plan.layout;
-    let mut pixmap = canvas(layout)?;
-    let clip = draw::plot_clip(layout);
-    draw::cells(
-        &mut pixmap,
-        layout,
-        mesh,
-        cell_values,
-        plan.cmap,
-        plan.range,
-        clip.as_ref(),
-    );
-    draw::edges(&mut pixmap, layout, mesh, opts.draw_edges, clip.as_ref());
-    let legend = Legend { cmap: plan.cmap, range: plan.range, tick_labels: &plan.tick_labels, label: &opts.label, title: opts.title.as_deref() };
-    decorate(&mut pixmap, layout, &legend);
-    Ok(pixmap)
-}
-
-/// A white picture of the layout's size.
-fn canvas(layout: &Layout) -> Result<Pixmap, RenderError> {
-    let size_error = RenderError::ImageSize { width: layout.width, height: layout.height };
-    let mut pixmap = Pixmap::new(layout.width, layout.height).ok_or(size_error)?;
-    pixmap.fill(Color::WHITE);
-    Ok(pixmap)
-}
-
-/// What surrounds a plot: its colour bar and title.
-struct Legend<'a> {
-    cmap: ColourMap,
-    range: (f64, f64),
-    tick_labels: &'a [String],
+/// The options both plans share: image width, colours and legend.
+struct Style<'a> {
+    width: u32,
+    range: Option<(f64, f64)>,
+    colour_map: Option<ColourMap>,
     label: &'a str,
     title: Option<&'a str>,
 }
 
-/// Draws the colour bar and the title around a drawn plot (2D and 3D).
-fn decorate(pixmap: &mut Pixmap, layout: &Layout, legend: &Legend) {
-    legend::draw_colour_bar(pixmap, layout, legend.cmap, legend.range, legend.tick_labels, legend.label);
-    if let Some(title) = legend.title {
-        draw_title(pixmap, layout, title);
-    }
-}
-
-/// Everything decided before drawing: validated inputs turned into a
-/// colour range, colour map, tick labels and layout.
-struct Plan {
+/// What both plans decide before drawing: the colour range and map, the
+/// tick labels, and the layout of the picture around the plot.
+struct Frame {
+    label: String,
+    title: Option<String>,
     range: (f64, f64),
     cmap: ColourMap,
     tick_labels: Vec<String>,
     layout: Layout,
 }
 
-impl Plan {
+impl Frame {
+    /// The frame of a picture of `values` whose plot area shows the box
+    /// `screen` (in world units of the plot's axes).
     fn new(
-        mesh: &QuadMesh,
-        cell_values: &[f64],
-        opts: &RenderOptions,
-    ) -> Result<Plan, RenderError> {
-        validate(mesh, cell_values)?;
-        let range = resolve_range(cell_values, opts.range)?;
-        let bounds = resolve_bounds(mesh, opts.bounds)?;
-        let cmap = opts.colour_map.unwrap_or_else(|| ColourMap::auto(range));
+        values: &[f64],
+        style: Style,
+        screen: ([f64; 2], [f64; 2]),
+    ) -> Result<Frame, RenderError> {
+        let range = resolve_range(values, style.range)?;
+        let cmap = style.colour_map.unwrap_or_else(|| ColourMap::auto(range));
         let tick_labels = legend::format_ticks(&legend::tick_values(range));
         let layout = Layout::new(
-            opts.width,
-            bounds,
-            opts.title.is_some(),
-            &opts.label,
+            style.width,
+            screen,
+            style.title.is_some(),
+            style.label,
             &tick_labels,
         )?;
-        Ok(Plan {
+        Ok(Frame {
+            label: style.label.to_string(),
+            title: style.title.map(str::to_string),
             range,
             cmap,
             tick_labels,
             layout,
         })
     }
+
+    /// The colour of cell value `v`.
+    fn colour(&self, v: f64) -> [u8; 3] {
+        self.cmap.colour(v, self.range)
+    }
+
+    /// A white picture of the layout's size.
+    fn canvas(&self) -> Result<Pixmap, RenderError> {
+        let (width, height) = (self.layout.width, self.layout.height);
+        let mut pixmap =
+            Pixmap::new(width, height).ok_or(RenderError::ImageSize { width, height })?;
+        pixmap.fill(Color::WHITE);
+        Ok(pixmap)
+    }
+
+    /// Draws the colour bar and the title around the drawn plot.
+    fn decorate(&self, pixmap: &mut Pixmap) {
+        let l = &self.layout;
+        legend::draw_colour_bar(
+            pixmap,
+            l,
+            self.cmap,
+            self.range,
+            &self.tick_labels,
+            &self.label,
+        );
+        if let Some(title) = &self.title {
+            legend::draw_title(pixmap, l, title);
+        }
+    }
+
+    /// Line width and opacity of the edges between cells (or faces) whose
+    /// world sizes are `sizes`, from the median size in pixels (robust to
+    /// a few tiny or huge cells in graded meshes), and that median.
+    /// Hairlines that fade on small cells, up to about a pixel on large
+    /// ones, so a 200×200 mesh stays readable and coarse meshes look
+    /// crisp; none under [`MIN_CELL_PX_FOR_EDGES`].
+    fn edge_style(&self, mut sizes: Vec<f64>) -> (f64, Option<(f32, f32)>) {
+        if sizes.is_empty() {
+            return (0.0, None);
+        }
+        let mid = sizes.len() / 2;
+        let (_, median, _) = sizes.select_nth_unstable_by(mid, f64::total_cmp);
+        let px = *median * self.layout.scale();
+        if px.is_nan() || px < MIN_CELL_PX_FOR_EDGES {
+            return (px, None);
+        }
+        let width = ((px / 25.0) as f32).clamp(0.4, 1.0) * self.layout.res();
+        let alpha = (0.35 + (px as f32 - 3.0) / 30.0).clamp(0.35, 0.8);
+        (px, Some((width, alpha)))
+    }
 }
 
-/// One finite value per cell: what every renderer's colours need.
-pub(crate) fn check_values(values: &[f64], cells: usize) -> Result<(), RenderError> {
-    if values.len() != cells {
-        return Err(RenderError::LengthMismatch { values: values.len(), cells });
+/// Checks values against cells and the mesh against what drawing indexes
+/// (order, node count per cell, node indices, finite nodes), so drawing
+/// cannot panic or produce garbage.
+fn validate<const D: usize>(mesh: &CurvedMesh<D>, values: &[f64]) -> Result<(), RenderError> {
+    if values.len() != mesh.cells.len() {
+        return Err(RenderError::LengthMismatch {
+            values: values.len(),
+            cells: mesh.cells.len(),
+        });
     }
     if let Some(index) = values.iter().position(|v| !v.is_finite()) {
         return Err(RenderError::NonFiniteValue { index });
     }
-    Ok(())
-}
-
-/// Checks that values match cells and everything is finite and in range,
-/// so drawing cannot index out of bounds or produce garbage.
-fn validate(mesh: &QuadMesh, values: &[f64]) -> Result<(), RenderError> {
-    check_values(values, mesh.cells.len())?;
+    if check_order(mesh.p).is_err() {
+        return Err(RenderError::InvalidCurvedMesh {
+            reason: format!("element order {} is not in 1..={MAX_ORDER}", mesh.p),
+        });
+    }
     if let Some(index) = mesh
         .nodes
         .iter()
-        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        .position(|p| !p.iter().all(|x| x.is_finite()))
     {
         return Err(RenderError::NonFiniteNode { index });
     }
-    let nodes = mesh.nodes.len();
-    let bad_cell = mesh
-        .cells
-        .iter()
-        .enumerate()
-        .find_map(|(cell, c)| c.iter().find(|&&n| n >= nodes).map(|&node| (cell, node)));
-    let bad_edge = mesh.edges.iter().find_map(|e| {
-        e.nodes
-            .iter()
-            .find(|&&n| n >= nodes)
-            .map(|&node| (usize::MAX, node))
-    });
-    match bad_cell.or(bad_edge) {
-        Some((cell, node)) => Err(RenderError::BadNodeIndex { cell, node, nodes }),
-        None => Ok(()),
+    let per_cell = (mesh.p + 1).pow(D as u32);
+    check_elements(
+        mesh.cells.iter().map(Vec::as_slice),
+        per_cell,
+        mesh.nodes.len(),
+        "cell",
+    )
+}
+
+/// Every element in `elements` must have `per` nodes, all below `nodes`.
+/// The index reported for a bad node is the element's.
+fn check_elements<'a>(
+    elements: impl Iterator<Item = &'a [usize]>,
+    per: usize,
+    nodes: usize,
+    what: &str,
+) -> Result<(), RenderError> {
+    for (cell, e) in elements.enumerate() {
+        if e.len() != per {
+            return Err(RenderError::InvalidCurvedMesh {
+                reason: format!("{what} {cell} has {} nodes, expected {per}", e.len()),
+            });
+        }
+        if let Some(&node) = e.iter().find(|&&n| n >= nodes) {
+            return Err(RenderError::BadNodeIndex { cell, node, nodes });
+        }
     }
+    Ok(())
 }
 
 /// The colour range: the given one, or the min and max of the values.
@@ -360,38 +368,55 @@ fn resolve_range(values: &[f64], given: Option<(f64, f64)>) -> Result<(f64, f64)
     Ok((low - pad, high + pad))
 }
 
-/// The world box: the given one, or the mesh's bounding box; it must be
-/// finite with positive width and height.
-fn resolve_bounds(
-    mesh: &QuadMesh,
-    given: Option<([f64; 2], [f64; 2])>,
-) -> Result<([f64; 2], [f64; 2]), RenderError> {
-    let (lo, hi) = given.unwrap_or_else(|| {
-        let mut lo = [f64::INFINITY; 2];
-        let mut hi = [f64::NEG_INFINITY; 2];
-        for p in &mesh.nodes {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
+/// The bounding box of `points` (infinite and reversed if there are none,
+/// which the callers reject).
+fn bounding_box<'a, const D: usize>(
+    points: impl IntoIterator<Item = &'a [f64; D]>,
+) -> ([f64; D], [f64; D]) {
+    let mut lo = [f64::INFINITY; D];
+    let mut hi = [f64::NEG_INFINITY; D];
+    for p in points {
+        for k in 0..D {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
         }
-        (lo, hi)
-    });
-    let ok = (0..2).all(|k| lo[k].is_finite() && hi[k].is_finite() && hi[k] > lo[k]);
-    if ok {
-        Ok((lo, hi))
+    }
+    (lo, hi)
+}
+
+/// Straight pieces that stand for one element edge of order `p`: one for
+/// `p = 1`, whose edges are straight (a linear mesh is drawn exactly as
+/// its cells), else `per_order · p`.
+fn pieces(p: usize, per_order: usize) -> usize {
+    if p == 1 {
+        1
     } else {
-        Err(RenderError::InvalidBounds { lo, hi })
+        per_order * p
     }
 }
 
-/// The title, one font step larger than the labels, centred over the plot
-/// but kept inside the image.
-fn draw_title(pixmap: &mut Pixmap, layout: &Layout, title: &str) {
-    let s = layout.text_scale + 1;
-    let w = font::text_width(title, s) as f64;
-    let centre = layout.plot[0] + 0.5 * layout.plot[2];
-    let max_x = (layout.width as f64 - layout.margin - w).max(0.0);
-    let x = (centre - 0.5 * w).clamp(layout.margin.min(max_x), max_x);
-    font::draw_text(pixmap, title, x as i32, layout.title_top, s, text_colour());
+/// Values of the order-`p` Lagrange basis at `t = k / n`, `k = 0..=n`: the
+/// weights of the nodes of an edge (or of one axis) at each sample.
+fn basis_table(p: usize, spacing: Spacing, n: usize) -> Vec<Vec<f64>> {
+    let basis = Basis1d::new(p, spacing).expect("order checked by validate");
+    (0..=n).map(|k| basis.eval(k as f64 / n as f64).0).collect()
+}
+
+/// The curve through nodes `ids` (in order, `p + 1` of them) sampled at
+/// every row of `table`, appended to `out`.
+fn sample_curve<const D: usize>(
+    table: &[Vec<f64>],
+    ids: &[usize],
+    nodes: &[[f64; D]],
+    out: &mut Vec<[f64; D]>,
+) {
+    out.extend(table.iter().map(|w| {
+        let mut x = [0.0; D];
+        for (&wi, &id) in w.iter().zip(ids) {
+            for d in 0..D {
+                x[d] += wi * nodes[id][d];
+            }
+        }
+        x
+    }));
 }

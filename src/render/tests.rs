@@ -1,28 +1,21 @@
 //! Tests that render real pictures, decode the encoded bytes and check
 //! pixels, so they catch wrong colours, positions, orientation and
-//! encodings rather than just "it did not crash".
+//! encodings rather than just "it did not crash"; and the helpers the 3D
+//! tests share.
 
+use std::f64::consts::PI;
 use std::path::Path;
 
 use image::RgbaImage;
 
+use super::quads::{plan, polygon_area, QuadCurves};
 use super::*;
+use crate::mesh::QuadMesh;
 
-/// Values of the 4×3 test mesh: cell c gets 0.85 + 0.025 c, so cell 6 is
-/// exactly 1 and the range 0.85..1.125 contains 1 (diverging map).
-fn known_values() -> Vec<f64> {
-    (0..12).map(|c| 0.85 + 0.025 * c as f64).collect()
-}
-
-fn box_4x3() -> QuadMesh {
-    QuadMesh::structured_box([0.0, 0.0], [4.0, 3.0], 4, 3)
-}
-
-/// Renders, encodes to PNG and decodes it again, returning the decoded
-/// image and the plan used, to locate things.
-fn render_decoded(mesh: &QuadMesh, values: &[f64], opts: &RenderOptions) -> (RgbaImage, Plan) {
-    let pixmap = render_mesh(mesh, values, opts).unwrap();
-    let png = png_bytes(&pixmap).unwrap();
+/// Decodes the PNG encoding of `pixmap`, so the tests see exactly what a
+/// file would hold.
+pub(crate) fn decoded(pixmap: &Pixmap) -> RgbaImage {
+    let png = png_bytes(pixmap).unwrap();
     let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
         .unwrap()
         .to_rgba8();
@@ -30,21 +23,74 @@ fn render_decoded(mesh: &QuadMesh, values: &[f64], opts: &RenderOptions) -> (Rgb
         (img.width(), img.height()),
         (pixmap.width(), pixmap.height())
     );
-    (img, Plan::new(mesh, values, opts).unwrap())
+    img
 }
 
-fn pixel_at(img: &RgbaImage, (x, y): (f32, f32)) -> [u8; 3] {
+pub(crate) fn pixel(img: &RgbaImage, x: f64, y: f64) -> [u8; 3] {
     let p = img.get_pixel(x as u32, y as u32).0;
     assert_eq!(p[3], 255, "picture should be opaque");
     [p[0], p[1], p[2]]
 }
 
-fn assert_close(found: [u8; 3], expected: [u8; 3], what: &str) {
-    let ok = (0..3).all(|k| found[k].abs_diff(expected[k]) <= 2);
+pub(crate) fn assert_close(found: [u8; 3], expected: [u8; 3], what: &str) {
+    let ok = (0..3).all(|k| found[k].abs_diff(expected[k]) <= 1);
     assert!(ok, "{what}: found {found:?}, expected {expected:?}");
 }
 
-fn centre(mesh: &QuadMesh, c: usize) -> [f64; 2] {
+pub(crate) const WHITE: [u8; 3] = [255, 255, 255];
+
+pub(crate) fn brightness(c: [u8; 3]) -> u32 {
+    c.iter().map(|&x| x as u32).sum()
+}
+
+/// The darkest pixel within one pixel of (x, y): a thin line through a
+/// point may cover its own pixel only partly.
+pub(crate) fn darkest_near(img: &RgbaImage, x: f64, y: f64) -> [u8; 3] {
+    let mut best = WHITE;
+    for dy in [-1.0, 0.0, 1.0] {
+        for dx in [-1.0, 0.0, 1.0] {
+            let c = pixel(img, x + dx, y + dy);
+            if brightness(c) < brightness(best) {
+                best = c;
+            }
+        }
+    }
+    best
+}
+
+/// Renders, encodes to PNG and decodes it again, returning the decoded
+/// image and the frame used, to locate things.
+fn render_decoded(
+    mesh: &CurvedMesh<2>,
+    values: &[f64],
+    opts: &RenderOptions,
+) -> (RgbaImage, Frame) {
+    let img = decoded(&render_quads(mesh, values, opts).unwrap());
+    (img, plan(mesh, values, opts).unwrap().0)
+}
+
+/// The pixel showing world point `p`.
+fn at(img: &RgbaImage, frame: &Frame, p: [f64; 2]) -> [u8; 3] {
+    let (x, y) = frame.layout.to_px(p);
+    pixel(img, x as f64, y as f64)
+}
+
+/// Values of the 4×3 test mesh: cell c gets 0.85 + 0.025 c, so cell 6 is
+/// exactly 1 and the range 0.85..1.125 contains 1 (diverging map).
+fn known_values() -> Vec<f64> {
+    (0..12).map(|c| 0.85 + 0.025 * c as f64).collect()
+}
+
+/// The linear mesh of `n[0] × n[1]` cells of the box `0..hi`.
+fn linear_box(hi: [f64; 2], n: [usize; 2]) -> CurvedMesh<2> {
+    CurvedMesh::from_quads(&QuadMesh::structured_box([0.0, 0.0], hi, n[0], n[1]))
+}
+
+fn box_4x3() -> CurvedMesh<2> {
+    linear_box([4.0, 3.0], [4, 3])
+}
+
+fn centre(mesh: &CurvedMesh<2>, c: usize) -> [f64; 2] {
     let p = mesh.cell_coords(c);
     [
         p.iter().map(|q| q[0]).sum::<f64>() / 4.0,
@@ -52,16 +98,29 @@ fn centre(mesh: &QuadMesh, c: usize) -> [f64; 2] {
     ]
 }
 
+fn empty() -> CurvedMesh<2> {
+    CurvedMesh {
+        nodes: vec![],
+        cells: vec![],
+        boundary: vec![],
+        ..box_4x3()
+    }
+}
+
 #[test]
 fn cell_centres_have_the_colour_of_their_value() {
     let mesh = box_4x3();
     let values = known_values();
-    let (img, plan) = render_decoded(&mesh, &values, &RenderOptions::default());
-    assert_eq!(plan.cmap, ColourMap::Diverging { centre: 1.0 });
-    assert_eq!(plan.range, (0.85, 0.85 + 0.025 * 11.0));
+    let opts = RenderOptions::default();
+    let (img, frame) = render_decoded(&mesh, &values, &opts);
+    assert_eq!(frame.cmap, ColourMap::Diverging { centre: 1.0 });
+    assert_eq!(frame.range, (0.85, 0.85 + 0.025 * 11.0));
     for (c, &v) in values.iter().enumerate() {
-        let found = pixel_at(&img, plan.layout.to_px(centre(&mesh, c)));
-        assert_close(found, plan.cmap.colour(v, plan.range), &format!("cell {c}"));
+        assert_close(
+            at(&img, &frame, centre(&mesh, c)),
+            frame.colour(v),
+            &format!("cell {c}"),
+        );
     }
 }
 
@@ -70,22 +129,14 @@ fn y_axis_points_up() {
     // Cell 0 is bottom-left in the world, so it must be bottom-left in the
     // picture: probe just inside the plot's lower-left corner, without
     // using the world-to-pixel map under test.
-    let mesh = box_4x3();
     let values = known_values();
-    let (img, plan) = render_decoded(&mesh, &values, &RenderOptions::default());
-    let [x, y, _, h] = plan.layout.plot;
-    let lower_left = pixel_at(&img, ((x + 20.0) as f32, (y + h - 20.0) as f32));
-    assert_close(
-        lower_left,
-        plan.cmap.colour(values[0], plan.range),
-        "lower-left cell",
-    );
-    let upper_left = pixel_at(&img, ((x + 20.0) as f32, (y + 20.0) as f32));
-    assert_close(
-        upper_left,
-        plan.cmap.colour(values[8], plan.range),
-        "upper-left cell",
-    );
+    let opts = RenderOptions::default();
+    let (img, frame) = render_decoded(&box_4x3(), &values, &opts);
+    let [x, y, _, h] = frame.layout.plot;
+    let lower_left = pixel(&img, x + 20.0, y + h - 20.0);
+    assert_close(lower_left, frame.colour(values[0]), "lower-left cell");
+    let upper_left = pixel(&img, x + 20.0, y + 20.0);
+    assert_close(upper_left, frame.colour(values[8]), "upper-left cell");
 }
 
 #[test]
@@ -93,8 +144,9 @@ fn value_one_is_near_white_in_the_diverging_map() {
     let mesh = box_4x3();
     let values = known_values();
     assert_eq!(values[6], 1.0);
-    let (img, plan) = render_decoded(&mesh, &values, &RenderOptions::default());
-    let found = pixel_at(&img, plan.layout.to_px(centre(&mesh, 6)));
+    let opts = RenderOptions::default();
+    let (img, frame) = render_decoded(&mesh, &values, &opts);
+    let found = at(&img, &frame, centre(&mesh, 6));
     assert!(
         found.iter().all(|&c| c >= 240),
         "value 1 drawn as {found:?}"
@@ -106,44 +158,36 @@ fn value_one_is_near_white_in_the_diverging_map() {
 
 #[test]
 fn background_outside_the_mesh_is_white() {
-    let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 2, 2);
+    let mesh = linear_box([1.0, 1.0], [2, 2]);
     let opts = RenderOptions {
         bounds: Some(([-1.0, -1.0], [3.0, 2.0])),
         ..RenderOptions::default()
     };
-    let (img, plan) = render_decoded(&mesh, &[0.9, 1.0, 1.1, 1.2], &opts);
+    let (img, frame) = render_decoded(&mesh, &[0.9, 1.0, 1.1, 1.2], &opts);
     for far in [[-0.5, -0.5], [2.5, 1.5], [2.0, 0.5], [0.5, 1.7]] {
-        assert_eq!(
-            pixel_at(&img, plan.layout.to_px(far)),
-            [255; 3],
-            "at {far:?}"
-        );
+        assert_eq!(at(&img, &frame, far), WHITE, "at {far:?}");
     }
-    assert_eq!(pixel_at(&img, (1.0, 1.0)), [255; 3], "image corner");
+    assert_eq!(pixel(&img, 1.0, 1.0), WHITE, "image corner");
     // and a cell inside is coloured
-    assert_ne!(pixel_at(&img, plan.layout.to_px([0.25, 0.25])), [255; 3]);
+    assert_ne!(at(&img, &frame, [0.25, 0.25]), WHITE);
 }
 
 #[test]
 fn colour_bar_runs_from_low_at_the_bottom_to_high_at_the_top() {
     for values in [known_values(), (0..12).map(|c| 2.0 + c as f64).collect()] {
-        let mesh = box_4x3();
-        let (img, plan) = render_decoded(&mesh, &values, &RenderOptions::default());
-        let [x, _, w, _] = plan.layout.bar;
-        let mid_x = (x + w / 2) as f32;
-        let top = pixel_at(&img, (mid_x, plan.layout.bar_row(1.0) as f32));
-        let bottom = pixel_at(&img, (mid_x, plan.layout.bar_row(0.0) as f32));
-        assert_close(top, plan.cmap.colour(plan.range.1, plan.range), "bar top");
-        assert_close(
-            bottom,
-            plan.cmap.colour(plan.range.0, plan.range),
-            "bar bottom",
-        );
+        let opts = RenderOptions::default();
+        let (img, frame) = render_decoded(&box_4x3(), &values, &opts);
+        let [x, _, w, _] = frame.layout.bar;
+        let mid_x = (x + w / 2) as f64;
+        let top = pixel(&img, mid_x, frame.layout.bar_row(1.0) as f64);
+        let bottom = pixel(&img, mid_x, frame.layout.bar_row(0.0) as f64);
+        assert_close(top, frame.colour(frame.range.1), "bar top");
+        assert_close(bottom, frame.colour(frame.range.0), "bar bottom");
         assert_ne!(top, bottom);
         // just outside the bar, to its left, is background
         assert_eq!(
-            pixel_at(&img, ((x - 4) as f32, plan.layout.bar_row(0.5) as f32)),
-            [255; 3]
+            pixel(&img, (x - 4) as f64, frame.layout.bar_row(0.5) as f64),
+            WHITE
         );
     }
 }
@@ -152,9 +196,10 @@ fn colour_bar_runs_from_low_at_the_bottom_to_high_at_the_top() {
 fn range_without_one_uses_the_sequential_map() {
     let mesh = box_4x3();
     let values: Vec<f64> = (0..12).map(|c| 2.0 + c as f64).collect();
-    let (img, plan) = render_decoded(&mesh, &values, &RenderOptions::default());
-    assert_eq!(plan.cmap, ColourMap::Sequential);
-    let found = pixel_at(&img, plan.layout.to_px(centre(&mesh, 11)));
+    let opts = RenderOptions::default();
+    let (img, frame) = render_decoded(&mesh, &values, &opts);
+    assert_eq!(frame.cmap, ColourMap::Sequential);
+    let found = at(&img, &frame, centre(&mesh, 11));
     assert_close(
         found,
         ColourMap::Sequential.colour(13.0, (2.0, 13.0)),
@@ -165,14 +210,13 @@ fn range_without_one_uses_the_sequential_map() {
 #[test]
 fn explicit_range_and_colour_map_are_used() {
     let mesh = box_4x3();
-    let values = known_values();
     let opts = RenderOptions {
         range: Some((0.0, 2.0)),
         colour_map: Some(ColourMap::Sequential),
         ..RenderOptions::default()
     };
-    let (img, plan) = render_decoded(&mesh, &values, &opts);
-    let found = pixel_at(&img, plan.layout.to_px(centre(&mesh, 0)));
+    let (img, frame) = render_decoded(&mesh, &known_values(), &opts);
+    let found = at(&img, &frame, centre(&mesh, 0));
     assert_close(
         found,
         ColourMap::Sequential.colour(0.85, (0.0, 2.0)),
@@ -192,16 +236,15 @@ fn edges_and_title_draw_dark_pixels_where_expected() {
         title: Some("t = 0.30".into()),
         ..RenderOptions::default()
     };
-    let (no_edges, plan) = render_decoded(&mesh, &values, &plain);
-    let (with_edges, plan_t) = render_decoded(&mesh, &values, &titled);
+    let (no_edges, frame) = render_decoded(&mesh, &values, &plain);
+    let (with_edges, frame_t) = render_decoded(&mesh, &values, &titled);
     // The vertical line x = 1 between cells 0 and 1, mid-height of row 0.
-    let on_edge = |p: &Plan| p.layout.to_px([1.0, 0.5]);
     let dark = |c: [u8; 3]| c.iter().all(|&v| v < 120);
-    assert!(!dark(pixel_at(&no_edges, on_edge(&plan))));
-    assert!(dark(pixel_at(&with_edges, on_edge(&plan_t))));
+    assert!(!dark(at(&no_edges, &frame, [1.0, 0.5])));
+    assert!(dark(at(&with_edges, &frame_t, [1.0, 0.5])));
     // The title adds height and puts ink in the top band.
-    assert!(plan_t.layout.height > plan.layout.height);
-    let band = (0..plan_t.layout.plot[1] as u32 / 2)
+    assert!(frame_t.layout.height > frame.layout.height);
+    let band = (0..frame_t.layout.plot[1] as u32 / 2)
         .flat_map(|y| (0..with_edges.width()).map(move |x| (x, y)));
     assert!(band
         .into_iter()
@@ -212,7 +255,7 @@ fn edges_and_title_draw_dark_pixels_where_expected() {
 fn bad_inputs_are_errors_not_panics() {
     let mesh = box_4x3();
     let opts = RenderOptions::default();
-    let err = |m: &QuadMesh, v: &[f64], o: &RenderOptions| render_mesh(m, v, o).unwrap_err();
+    let err = |m: &CurvedMesh<2>, v: &[f64], o: &RenderOptions| render_quads(m, v, o).unwrap_err();
     assert!(matches!(
         err(&mesh, &[1.0; 11], &opts),
         RenderError::LengthMismatch {
@@ -249,6 +292,24 @@ fn bad_inputs_are_errors_not_panics() {
             ..
         }
     ));
+    let mut bad = mesh.clone();
+    bad.cells[2].pop();
+    assert!(matches!(
+        err(&bad, &v, &opts),
+        RenderError::InvalidCurvedMesh { .. }
+    ));
+    let mut bad = mesh.clone();
+    bad.boundary[1].nodes.push(0);
+    assert!(matches!(
+        err(&bad, &v, &opts),
+        RenderError::InvalidCurvedMesh { .. }
+    ));
+    let mut bad = mesh.clone();
+    bad.p = 7;
+    assert!(matches!(
+        err(&bad, &v, &opts),
+        RenderError::InvalidCurvedMesh { .. }
+    ));
 
     let with = |f: &dyn Fn(&mut RenderOptions)| {
         let mut o = RenderOptions::default();
@@ -280,14 +341,8 @@ fn bad_inputs_are_errors_not_panics() {
         err(&mesh, &v, &narrow),
         RenderError::ImageSize { .. }
     ));
-    let empty = QuadMesh {
-        nodes: vec![],
-        cells: vec![],
-        edges: vec![],
-        part_names: vec![],
-    };
     assert!(matches!(
-        err(&empty, &[], &opts),
+        err(&empty(), &[], &opts),
         RenderError::InvalidBounds { .. }
     ));
 }
@@ -295,49 +350,159 @@ fn bad_inputs_are_errors_not_panics() {
 #[test]
 fn degenerate_inputs_still_render() {
     // All values equal (a perfect mesh): the range is widened, not an error.
-    let mesh = box_4x3();
-    let (img, plan) = render_decoded(&mesh, &[1.0; 12], &RenderOptions::default());
-    assert!(plan.range.0 < 1.0 && plan.range.1 > 1.0);
-    assert!(pixel_at(&img, plan.layout.to_px([0.5, 0.5]))
-        .iter()
-        .all(|&c| c >= 240));
+    let opts = RenderOptions::default();
+    let (img, frame) = render_decoded(&box_4x3(), &[1.0; 12], &opts);
+    assert!(frame.range.0 < 1.0 && frame.range.1 > 1.0);
+    assert!(at(&img, &frame, [0.5, 0.5]).iter().all(|&c| c >= 240));
     // A very tall domain is capped in height; an empty mesh with a frame
     // renders an empty plot.
-    let tall = QuadMesh::structured_box([0.0, 0.0], [1.0, 100.0], 1, 10);
-    let p = render_mesh(&tall, &[1.0; 10], &RenderOptions::default()).unwrap();
+    let tall = linear_box([1.0, 100.0], [1, 10]);
+    let p = render_quads(&tall, &[1.0; 10], &opts).unwrap();
     assert!(p.height() <= 4 * p.width());
-    let empty = QuadMesh {
-        nodes: vec![],
-        cells: vec![],
-        edges: vec![],
-        part_names: vec![],
-    };
     let framed = RenderOptions {
         bounds: Some(([0.0, 0.0], [1.0, 1.0])),
         ..RenderOptions::default()
     };
-    assert!(render_mesh(&empty, &[], &framed).is_ok());
+    assert!(render_quads(&empty(), &[], &framed).is_ok());
 }
 
 #[test]
 fn edges_fade_out_on_tiny_cells() {
-    assert!(draw::interior_style(2.5, 1.0).is_none());
-    let (w_small, a_small) = draw::interior_style(4.0, 1.0).unwrap();
-    let (w_big, a_big) = draw::interior_style(100.0, 1.0).unwrap();
+    let opts = RenderOptions::default();
+    let (_, frame) = render_decoded(&box_4x3(), &known_values(), &opts);
+    // Sizes in world units for cells of 2.5, 4 and 100 pixels.
+    let style = |px: f64| frame.edge_style(vec![px / frame.layout.scale()]).1;
+    assert!(style(2.5).is_none());
+    let (w_small, a_small) = style(4.0).unwrap();
+    let (w_big, a_big) = style(100.0).unwrap();
     assert!(w_small < w_big && a_small < a_big);
     // A 200×200 mesh at the default width still renders, with cell colours
     // visible between the hairlines.
-    let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 200, 200);
-    let values: Vec<f64> = (0..mesh.num_cells())
+    let mesh = linear_box([1.0, 1.0], [200, 200]);
+    let values: Vec<f64> = (0..mesh.cells.len())
         .map(|c| 0.9 + 0.2 * (c % 200) as f64 / 199.0)
         .collect();
-    let (img, plan) = render_decoded(&mesh, &values, &RenderOptions::default());
+    let (img, frame) = render_decoded(&mesh, &values, &opts);
     let c = 200 * 100 + 150;
     assert_close(
-        pixel_at(&img, plan.layout.to_px(centre(&mesh, c))),
-        plan.cmap.colour(values[c], plan.range),
+        at(&img, &frame, centre(&mesh, c)),
+        frame.colour(values[c]),
         "fine cell",
     );
+}
+
+/// Quarter annulus `1 ≤ r ≤ 2`, `0 ≤ θ ≤ π/2`: ξ runs along the angle, η
+/// along the radius.
+fn annulus(p: usize, n: [usize; 2]) -> CurvedMesh<2> {
+    CurvedMesh::structured(p, Spacing::GaussLobatto, n, |[u, v]| {
+        let (r, t) = (1.0 + v, 0.5 * PI * u);
+        [r * t.cos(), r * t.sin()]
+    })
+    .unwrap()
+}
+
+/// One cell of the unit square whose top edge bulges up by 0.3 in the
+/// middle (exactly representable at p = 2: y + 1.2 y x (1 − x)).
+fn bulged_square(p: usize) -> CurvedMesh<2> {
+    CurvedMesh::structured(p, Spacing::Equispaced, [1, 1], |[x, y]| {
+        [x, y + 1.2 * y * x * (1.0 - x)]
+    })
+    .unwrap()
+}
+
+#[test]
+fn annulus_renders_with_cell_colours_inside_the_arc() {
+    let mesh = annulus(3, [4, 2]);
+    let values: Vec<f64> = (0..8).map(|c| 0.9 + 0.03 * c as f64).collect();
+    let opts = RenderOptions::default();
+    let (img, frame) = render_decoded(&mesh, &values, &opts);
+    // Outer cells are 4..8 (η is the second axis). At the middle angle of
+    // each, halfway between the chord of its outer edge and the arc:
+    // inside the true element, outside the straight-sided one.
+    let dt = 0.5 * PI / 4.0;
+    let sagitta = 2.0 * (1.0 - (0.5 * dt).cos());
+    for i in 0..4 {
+        let t = (i as f64 + 0.5) * dt;
+        let r = 2.0 - 0.5 * sagitta;
+        let found = at(&img, &frame, [r * t.cos(), r * t.sin()]);
+        assert_close(
+            found,
+            frame.colour(values[4 + i]),
+            &format!("bulge of cell {}", 4 + i),
+        );
+        // Just outside the arc is background.
+        let r = 2.0 + 0.02;
+        assert_eq!(at(&img, &frame, [r * t.cos(), r * t.sin()]), WHITE);
+    }
+    // The inner arc bulges into the hole: between arc and chord there is
+    // no cell.
+    let (t, r) = (0.5 * dt, 1.0 - 0.5 * sagitta);
+    assert_eq!(at(&img, &frame, [r * t.cos(), r * t.sin()]), WHITE);
+}
+
+#[test]
+fn bulge_of_a_curved_edge_has_the_cell_colour() {
+    for p in [2, 3] {
+        let mesh = bulged_square(p);
+        let opts = RenderOptions {
+            width: 400,
+            ..RenderOptions::default()
+        };
+        let (img, frame) = render_decoded(&mesh, &[1.1], &opts);
+        // Default bounds follow the curve: the top of the plot is at the
+        // top of the bulge (y = 1.3), not at the nodes.
+        let (_, top) = frame.layout.to_px([0.5, 1.3]);
+        assert!((top as f64 - frame.layout.plot[1]).abs() < 0.5);
+        // Above the chord y = 1, below the curve (1.29 at x = 0.42), and
+        // off the internal node lines x = ½ (p = 2) and x = ⅓, ⅔.
+        assert_close(at(&img, &frame, [0.42, 1.15]), frame.colour(1.1), "bulge");
+        // Above the curve near the corner (curve at 1.108 there).
+        assert_eq!(at(&img, &frame, [0.1, 1.25]), WHITE, "p = {p}");
+    }
+}
+
+#[test]
+fn boundary_and_internal_node_lines_are_drawn_as_curves() {
+    let mesh = bulged_square(2);
+    let opts = RenderOptions {
+        width: 400,
+        ..RenderOptions::default()
+    };
+    let (img, frame) = render_decoded(&mesh, &[1.1], &opts);
+    let cell = frame.colour(1.1);
+    let near = |p: [f64; 2]| {
+        let (x, y) = frame.layout.to_px(p);
+        darkest_near(&img, x as f64, y as f64)
+    };
+    // The boundary follows the curve: dark at (0.3, 1 + 1.2·0.21).
+    assert!(brightness(near([0.3, 1.0 + 1.2 * 0.3 * 0.7])) + 100 < brightness(cell));
+    // The internal line η = ½ is the curve y = ½ + 0.6 x (1 − x): at
+    // x = 0.3 it is at 0.626 (faint: darker, but not like an edge), and
+    // the straight y = ½ there is plain cell.
+    let on_line = near([0.3, 0.626]);
+    let faint =
+        brightness(on_line) + 15 < brightness(cell) && brightness(on_line) + 100 > brightness(cell);
+    assert!(faint, "line η = ½ at {on_line:?}, cell {cell:?}");
+    assert_close(at(&img, &frame, [0.3, 0.5]), cell, "off the line");
+}
+
+#[test]
+fn shared_curved_edges_are_sampled_once() {
+    let mesh = annulus(3, [4, 2]);
+    let curves = QuadCurves::new(&mesh);
+    // 4×2 cells: 4·3 angular edges + 5·2 radial ones.
+    assert_eq!(curves.edges(false).count() + curves.edges(true).count(), 22);
+    assert_eq!(curves.edges(true).count(), 12);
+    assert_eq!(curves.grid.len(), 8 * 2 * 2 * (8 * 3 + 1));
+    // Outlines are closed curves that follow the arc: the area of the
+    // whole annulus is 3π/4 to sampling accuracy (the chords lose about
+    // 1.4e-4 against the true arcs).
+    let area: f64 = (0..8).map(|c| polygon_area(&curves.outline(c)).abs()).sum();
+    assert!((area - 0.75 * PI).abs() < 5e-4, "area {area}");
+    // A linear mesh is drawn as its cells: one straight piece per edge.
+    let curves = QuadCurves::new(&box_4x3());
+    assert_eq!(curves.outline(5).len(), 4);
+    assert!(curves.grid.is_empty());
 }
 
 fn frames(sizes: &[u32]) -> Vec<Pixmap> {
@@ -352,7 +517,7 @@ fn frames(sizes: &[u32]) -> Vec<Pixmap> {
                 range: Some((0.8, 1.2)),
                 ..RenderOptions::default()
             };
-            render_mesh(&mesh, &values, &opts).unwrap()
+            render_quads(&mesh, &values, &opts).unwrap()
         })
         .collect()
 }

@@ -1,6 +1,6 @@
-//! A small z-buffer rasteriser: flat-coloured quads (as two triangles)
-//! with their borders darkened as edge lines, a silhouette pass, and
-//! averaging down into a pixmap.
+//! A small z-buffer rasteriser: triangles painted sample by sample (the
+//! painter darkens edge lines), a silhouette pass, and averaging down into
+//! a pixmap.
 
 use tiny_skia::{Pixmap, PremultipliedColorU8};
 
@@ -36,19 +36,6 @@ impl Canvas {
             rgb: vec![[255; 3]; n],
             depth: vec![f32::INFINITY; n],
         }
-    }
-
-    /// Draws the quad with corners `q` (x, y in samples, depth key; smaller
-    /// is nearer) in `colour` where it is nearer than what is there, with
-    /// its border darkened by `edges`. Split along the 0–2 diagonal.
-    pub fn fill_quad(&mut self, q: &[[f64; 3]; 4], colour: [u8; 3], edges: Option<EdgeStyle>) {
-        let border = [[q[0], q[1]], [q[1], q[2]], [q[2], q[3]], [q[3], q[0]]];
-        let paint = |x: f64, y: f64| match edges {
-            Some(style) => edge_blend(colour, style, distance_to_border(&border, x, y)),
-            None => colour,
-        };
-        self.fill_triangle([q[0], q[1], q[2]], &paint);
-        self.fill_triangle([q[0], q[2], q[3]], &paint);
     }
 
     /// Rasterises one triangle: a sample is inside when its centre is on
@@ -161,14 +148,7 @@ fn orient(a: [f64; 3], b: [f64; 3], px: f64, py: f64) -> f64 {
     (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])
 }
 
-/// Distance in the plane from (x, y) to the nearest side of the quad.
-fn distance_to_border(border: &[[[f64; 3]; 2]; 4], x: f64, y: f64) -> f64 {
-    border
-        .iter()
-        .map(|[a, b]| distance_to_segment(*a, *b, x, y))
-        .fold(f64::INFINITY, f64::min)
-}
-
+/// Distance in the plane from (x, y) to the segment a–b.
 pub(crate) fn distance_to_segment(a: [f64; 3], b: [f64; 3], x: f64, y: f64) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
@@ -177,7 +157,9 @@ pub(crate) fn distance_to_segment(a: [f64; 3], b: [f64; 3], x: f64, y: f64) -> f
     } else {
         0.0
     };
-    (x - a[0] - t * dx).hypot(y - a[1] - t * dy)
+    let (ex, ey) = (x - a[0] - t * dx, y - a[1] - t * dy);
+    // Not `hypot`: its care for overflow costs much per sample here.
+    (ex * ex + ey * ey).sqrt()
 }
 
 /// The face colour with the edge line laid over it: full line opacity
@@ -229,24 +211,22 @@ fn dilate(
 mod tests {
     use super::*;
 
+    /// The quad `q` in a plain colour, as two triangles split along the
+    /// 0–2 diagonal, as the surface is drawn.
+    fn quad(c: &mut Canvas, q: [[f64; 2]; 4], depth: f64, colour: [u8; 3]) {
+        let q = q.map(|[x, y]| [x, y, depth]);
+        c.fill_triangle([q[0], q[1], q[2]], &|_, _| colour);
+        c.fill_triangle([q[0], q[2], q[3]], &|_, _| colour);
+    }
+
     #[test]
     fn nearer_quad_wins_whatever_the_drawing_order() {
-        let far = [
-            [0.0, 0.0, 5.0],
-            [10.0, 0.0, 5.0],
-            [10.0, 10.0, 5.0],
-            [0.0, 10.0, 5.0],
-        ];
-        let near = far.map(|p| [p[0], p[1], 1.0]);
+        let square = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+        let (far, near) = ((5.0, [255, 0, 0]), (1.0, [0, 0, 255]));
         for order in [[far, near], [near, far]] {
             let mut c = Canvas::new(10, 10);
-            for q in &order {
-                let colour = if q[0][2] == 1.0 {
-                    [0, 0, 255]
-                } else {
-                    [255, 0, 0]
-                };
-                c.fill_quad(q, colour, None);
+            for (depth, colour) in order {
+                quad(&mut c, square, depth, colour);
             }
             assert!(c.rgb.iter().all(|&p| p == [0, 0, 255]));
             assert!(c.depth.iter().all(|&d| d == 1.0));
@@ -256,52 +236,39 @@ mod tests {
     #[test]
     fn neighbouring_quads_leave_no_gap_and_either_winding_fills() {
         let mut c = Canvas::new(20, 10);
-        let left = [
-            [0.0, 0.0, 0.0],
-            [7.3, 0.0, 0.0],
-            [7.3, 10.0, 0.0],
-            [0.0, 10.0, 0.0],
-        ];
+        let left = [[0.0, 0.0], [7.3, 0.0], [7.3, 10.0], [0.0, 10.0]];
         // Clockwise on screen: must fill as well.
-        let right = [
-            [7.3, 0.0, 0.0],
-            [7.3, 10.0, 0.0],
-            [20.0, 10.0, 0.0],
-            [20.0, 0.0, 0.0],
-        ];
-        c.fill_quad(&left, [1, 1, 1], None);
-        c.fill_quad(&right, [2, 2, 2], None);
+        let right = [[7.3, 0.0], [7.3, 10.0], [20.0, 10.0], [20.0, 0.0]];
+        quad(&mut c, left, 0.0, [1, 1, 1]);
+        quad(&mut c, right, 0.0, [2, 2, 2]);
         assert!(c.depth.iter().all(|d| d.is_finite()));
     }
 
     #[test]
-    fn edges_darken_only_near_the_border() {
-        let mut c = Canvas::new(20, 20);
-        let q = [
-            [0.0, 0.0, 0.0],
-            [20.0, 0.0, 0.0],
-            [20.0, 20.0, 0.0],
-            [0.0, 20.0, 0.0],
-        ];
+    fn edge_lines_fade_over_one_sample_around_the_half_width() {
         let style = EdgeStyle {
             half_width: 1.5,
             alpha: 1.0,
         };
-        c.fill_quad(&q, [200, 200, 200], Some(style));
-        assert_eq!(c.rgb[10 * 20 + 10], [200, 200, 200]);
-        assert_eq!(c.rgb[10 * 20], INK, "sample centre 0.5 from the border");
+        let grey = [200, 200, 200];
+        assert_eq!(edge_blend(grey, style, 1.0), INK);
+        assert_eq!(edge_blend(grey, style, 2.0), grey);
+        let half = edge_blend(grey, style, 1.5);
+        assert!(half[0] > INK[0] && half[0] < grey[0], "{half:?}");
+        let (a, b) = ([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]);
+        assert_eq!(distance_to_segment(a, b, 5.0, 2.0), 2.0);
+        assert_eq!(distance_to_segment(a, b, 13.0, 4.0), 5.0);
     }
 
     #[test]
     fn outline_marks_covered_samples_next_to_empty_ones() {
         let mut c = Canvas::new(10, 10);
-        let q = [
-            [2.0, 2.0, 0.0],
-            [8.0, 2.0, 0.0],
-            [8.0, 8.0, 0.0],
-            [2.0, 8.0, 0.0],
-        ];
-        c.fill_quad(&q, [200, 200, 200], None);
+        quad(
+            &mut c,
+            [[2.0, 2.0], [8.0, 2.0], [8.0, 8.0], [2.0, 8.0]],
+            0.0,
+            [200, 200, 200],
+        );
         c.outline(1, INK, 1.0);
         assert_eq!(c.rgb[2 * 10 + 2], INK);
         assert_eq!(c.rgb[5 * 10 + 2], INK);

@@ -1,7 +1,5 @@
 //! The surface to draw: faces of kept cells that no other kept cell shares.
 
-use std::collections::HashMap;
-
 pub(crate) use crate::mesh::HEX_FACES;
 
 /// One quad of the drawn surface.
@@ -16,37 +14,30 @@ pub(crate) struct SurfaceFace {
 /// The faces of kept cells (`kept[c]`) not shared with another kept cell:
 /// the original boundary of the kept cells plus the faces exposed where a
 /// neighbour was dropped. Faces come in cell order, so the picture does not
-/// depend on hash order.
+/// depend on the sorting.
 pub(crate) fn surface_faces(cells: &[[usize; 8]], kept: &[bool]) -> Vec<SurfaceFace> {
-    let owners = face_owners(cells);
-    let mut faces = Vec::new();
-    for (c, cell) in cells.iter().enumerate().filter(|&(c, _)| kept[c]) {
-        for local in HEX_FACES {
-            let nodes = local.map(|i| cell[i]);
-            let shared = owners[&key(nodes)]
-                .iter()
-                .any(|&other| other != c && kept[other]);
-            if !shared {
-                faces.push(SurfaceFace { nodes, cell: c });
-            }
-        }
-    }
+    // Every face of a kept cell, keyed by its sorted nodes, then sorted so
+    // that the copies of a face are neighbours.
+    let mut all: Vec<([usize; 4], usize, usize)> = cells
+        .iter()
+        .enumerate()
+        .filter(|&(c, _)| kept[c])
+        .flat_map(|(c, cell)| (0..6).map(move |f| (key(HEX_FACES[f].map(|i| cell[i])), c, f)))
+        .collect();
+    all.sort_unstable();
+    let mut faces: Vec<(usize, usize)> = all
+        .chunk_by(|a, b| a.0 == b.0)
+        .filter(|run| run.iter().all(|r| r.1 == run[0].1))
+        .flat_map(|run| run.iter().map(|r| (r.1, r.2)))
+        .collect();
+    faces.sort_unstable();
     faces
-}
-
-/// For every distinct face (keyed by its sorted nodes), the cells that use
-/// it: one on the boundary, two inside a valid mesh.
-fn face_owners(cells: &[[usize; 8]]) -> HashMap<[usize; 4], Vec<usize>> {
-    let mut owners: HashMap<[usize; 4], Vec<usize>> = HashMap::with_capacity(3 * cells.len() + 8);
-    for (c, cell) in cells.iter().enumerate() {
-        for local in HEX_FACES {
-            owners
-                .entry(key(local.map(|i| cell[i])))
-                .or_default()
-                .push(c);
-        }
-    }
-    owners
+        .into_iter()
+        .map(|(cell, f)| SurfaceFace {
+            nodes: HEX_FACES[f].map(|i| cells[cell][i]),
+            cell,
+        })
+        .collect()
 }
 
 /// The same key for a face whichever corner and direction it starts from.

@@ -1,18 +1,27 @@
 //! Tests that render real hex-mesh pictures, encode them as PNG, decode
 //! them again and check pixels: colours, shading, positions, hidden
-//! surfaces, clipping and errors.
+//! surfaces, clipping, curved faces and errors.
+
+use std::f64::consts::PI;
 
 use image::RgbaImage;
 
 use super::view::{self, shade_colour};
 use super::*;
-use crate::render::png_bytes;
+use crate::mesh::element::Spacing;
+use crate::mesh::HexMesh;
+use crate::render::tests::{assert_close, brightness, darkest_near, decoded, pixel, WHITE};
 
 const BLUE_VALUE: f64 = 0.9;
 const RED_VALUE: f64 = 1.1;
 
-fn brick(n: [usize; 3]) -> HexMesh {
-    HexMesh::structured_box([0.0; 3], [n[0] as f64, n[1] as f64, n[2] as f64], n)
+/// The linear mesh `mesh` as the order-1 case.
+fn linear(mesh: &HexMesh) -> CurvedMesh<3> {
+    CurvedMesh::from_hexes(mesh)
+}
+
+fn brick(n: [usize; 3]) -> CurvedMesh<3> {
+    linear(&HexMesh::structured_box([0.0; 3], n.map(|k| k as f64), n))
 }
 
 /// Looking straight down the z axis (x right, y up in the picture).
@@ -32,46 +41,36 @@ fn opts(camera: Camera) -> RenderOptions3 {
     }
 }
 
-/// Renders, encodes to PNG and decodes it again, returning the image and
-/// the plan used, to locate things.
-fn render_decoded(mesh: &HexMesh, values: &[f64], opts: &RenderOptions3) -> (RgbaImage, Plan3) {
-    let pixmap = render_hex(mesh, values, opts).unwrap();
-    let png = png_bytes(&pixmap).unwrap();
-    let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
-        .unwrap()
-        .to_rgba8();
-    assert_eq!(
-        (img.width(), img.height()),
-        (pixmap.width(), pixmap.height())
-    );
-    (img, Plan3::new(mesh, values, opts).unwrap())
+/// The plan of `mesh`.
+fn plan_of(mesh: &CurvedMesh<3>, values: &[f64], opts: &RenderOptions3) -> HexPlan {
+    HexPlan::new(mesh, values, opts).unwrap()
 }
 
-fn pixel(img: &RgbaImage, x: f64, y: f64) -> [u8; 3] {
-    let p = img.get_pixel(x as u32, y as u32).0;
-    assert_eq!(p[3], 255, "picture should be opaque");
-    [p[0], p[1], p[2]]
+/// Renders, encodes to PNG and decodes it again, returning the image and
+/// the plan used, to locate things.
+fn render_decoded(
+    mesh: &CurvedMesh<3>,
+    values: &[f64],
+    opts: &RenderOptions3,
+) -> (RgbaImage, HexPlan) {
+    let img = decoded(&render_hexes(mesh, values, opts).unwrap());
+    (img, plan_of(mesh, values, opts))
 }
 
 /// The pixel showing world point `p`.
-fn pixel_of(img: &RgbaImage, plan: &Plan3, p: [f64; 3]) -> [u8; 3] {
+fn pixel_of(img: &RgbaImage, plan: &HexPlan, p: [f64; 3]) -> [u8; 3] {
     let [x, y, _] = plan.to_image(p).unwrap();
     pixel(img, x, y)
 }
 
-fn assert_close(found: [u8; 3], expected: [u8; 3], what: &str) {
-    let ok = (0..3).all(|k| found[k].abs_diff(expected[k]) <= 1);
-    assert!(ok, "{what}: found {found:?}, expected {expected:?}");
-}
-
 /// The colour a face of value `v` with outward unit normal `n` (facing
 /// the viewer) must have: the map's colour times the light factor.
-fn expected(plan: &Plan3, v: f64, n: [f64; 3]) -> [u8; 3] {
-    shade_colour(plan.cmap.colour(v, plan.range), plan.view.light_factor(n))
+fn expected(plan: &HexPlan, v: f64, n: [f64; 3]) -> [u8; 3] {
+    shade_colour(plan.frame.colour(v), plan.view.light_factor(n))
 }
 
 fn is_white(c: [u8; 3]) -> bool {
-    c == [255, 255, 255]
+    c == WHITE
 }
 
 fn bluish(c: [u8; 3]) -> bool {
@@ -83,14 +82,14 @@ fn reddish(c: [u8; 3]) -> bool {
 }
 
 /// Pixel rows and columns of the plot region, where the mesh may be drawn.
-fn plot_pixels(plan: &Plan3) -> impl Iterator<Item = (u32, u32)> {
-    let [x0, y0, w, h] = plot_region(&plan.layout);
+fn plot_pixels(plan: &HexPlan) -> impl Iterator<Item = (u32, u32)> {
+    let [x0, y0, w, h] = plan.frame.layout.plot_region();
     (y0..y0 + h).flat_map(move |y| (x0..x0 + w).map(move |x| (x, y)))
 }
 
 /// Bounding box (x0, y0, x1, y1) of the non-white pixels of the plot
 /// region, found from the image alone.
-fn drawn_box(img: &RgbaImage, plan: &Plan3) -> [u32; 4] {
+fn drawn_box(img: &RgbaImage, plan: &HexPlan) -> [u32; 4] {
     let mut b = [u32::MAX, u32::MAX, 0, 0];
     for (x, y) in plot_pixels(plan) {
         if !is_white(pixel(img, x as f64, y as f64)) {
@@ -113,7 +112,7 @@ fn cube_from_above_fills_a_square_with_its_top_colour() {
 
     // The drawn region is a square of the unit cube's size.
     let [x0, y0, x1, y1] = drawn_box(&img, &plan);
-    let side = plan.layout.scale();
+    let side = plan.frame.layout.scale();
     assert!(
         ((x1 - x0 + 1) as f64 - side).abs() <= 2.0,
         "width {} vs {side}",
@@ -125,7 +124,7 @@ fn cube_from_above_fills_a_square_with_its_top_colour() {
         y1 - y0 + 1
     );
     // It is where the cube is: the middle third of the framed 3×3 box.
-    let [px, py, pw, _] = plan.layout.plot;
+    let [px, py, pw, _] = plan.frame.layout.plot;
     assert!((x0 as f64 - (px + pw / 3.0)).abs() <= 2.0);
     assert!((y0 as f64 - (py + pw / 3.0)).abs() <= 2.0);
 
@@ -228,7 +227,7 @@ fn three_quarter_view_shades_top_front_and_side_differently() {
 /// Renders `mesh` (two cells, values blue then red) with the cells and
 /// values also listed in reverse order, so a renderer that lets the last
 /// drawn face win fails one of the two.
-fn both_orders(mesh: &HexMesh, o: &RenderOptions3) -> Vec<(RgbaImage, Plan3)> {
+fn both_orders(mesh: &CurvedMesh<3>, o: &RenderOptions3) -> Vec<(RgbaImage, HexPlan)> {
     let mut reversed = mesh.clone();
     reversed.cells.reverse();
     vec![
@@ -317,8 +316,15 @@ fn clip_plane_exposes_the_inner_face() {
         ..opts(from_right)
     };
     let (img, plan) = render_decoded(&mesh, &values, &clipped);
-    assert_eq!(plan.kept, [true, false]);
-    assert_eq!(plan.range, (BLUE_VALUE, RED_VALUE), "range from all values");
+    assert!(
+        plan.patches.iter().all(|f| f.cell == 0),
+        "cell 1 is dropped"
+    );
+    assert_eq!(
+        plan.frame.range,
+        (BLUE_VALUE, RED_VALUE),
+        "range from all values"
+    );
     assert_close(
         pixel_of(&img, &plan, [1.0, 0.5, 0.5]),
         expected(&plan, BLUE_VALUE, n),
@@ -379,16 +385,18 @@ fn edges_are_drawn_between_faces_and_can_be_turned_off() {
 
 #[test]
 fn edges_are_left_out_when_faces_are_tiny() {
-    let style = |mesh: &HexMesh| {
-        let values = vec![1.0; mesh.num_cells()];
+    let style = |mesh: &CurvedMesh<3>| {
+        let values = vec![1.0; mesh.cells.len()];
         let o = opts(Camera::default());
-        let plan = Plan3::new(mesh, &values, &o).unwrap();
-        let faces = surface::surface_faces(&mesh.cells, &plan.kept);
-        edge_style(&plan, mesh, &faces, true)
+        edge_style(&plan_of(mesh, &values, &o))
     };
     assert!(style(&brick([2, 2, 2])).is_some());
     // A thin plate of 100 × 100 cells: faces of about 2 pixels.
-    let fine = HexMesh::structured_box([0.0; 3], [1.0, 1.0, 0.01], [100, 100, 1]);
+    let fine = linear(&HexMesh::structured_box(
+        [0.0; 3],
+        [1.0, 1.0, 0.01],
+        [100, 100, 1],
+    ));
     assert_eq!(style(&fine), None);
 }
 
@@ -407,7 +415,7 @@ fn perspective_makes_far_edges_shorter() {
         let (img, plan) = render_decoded(&mesh, &[1.0], &opts(camera));
         let [_, y0, _, y1] = drawn_box(&img, &plan);
         let row_width = |y: u32| {
-            let [x0, _, w, _] = plot_region(&plan.layout);
+            let [x0, _, w, _] = plan.frame.layout.plot_region();
             (x0..x0 + w)
                 .filter(|&x| !is_white(pixel(&img, x as f64, y as f64)))
                 .count() as f64
@@ -433,22 +441,16 @@ fn frames_with_the_same_bounds_line_up() {
         ..opts(Camera::default())
     };
     let values = vec![1.0; 8];
-    let (pa, pb) = (
-        Plan3::new(&a, &values, &o).unwrap(),
-        Plan3::new(&b, &values, &o).unwrap(),
-    );
+    let (pa, pb) = (plan_of(&a, &values, &o), plan_of(&b, &values, &o));
     assert_eq!(
-        (pa.layout.width, pa.layout.height),
-        (pb.layout.width, pb.layout.height)
+        (pa.frame.layout.width, pa.frame.layout.height),
+        (pb.frame.layout.width, pb.frame.layout.height)
     );
     let p = [1.0, 0.0, 2.0];
     assert_eq!(pa.to_image(p), pb.to_image(p));
     // Without a box each frames itself, so they differ.
     let o = opts(Camera::default());
-    let (pa, pb) = (
-        Plan3::new(&a, &values, &o).unwrap(),
-        Plan3::new(&b, &values, &o).unwrap(),
-    );
+    let (pa, pb) = (plan_of(&a, &values, &o), plan_of(&b, &values, &o));
     assert_ne!(pa.to_image(p), pb.to_image(p));
 }
 
@@ -460,20 +462,20 @@ fn colour_bar_and_title_are_drawn() {
         ..opts(Camera::default())
     };
     let (img, plan) = render_decoded(&mesh, &[BLUE_VALUE, RED_VALUE], &o);
-    let [bx, by, bw, bh] = plan.layout.bar;
+    let [bx, by, bw, bh] = plan.frame.layout.bar;
     let x = (bx + bw / 2) as f64;
     assert_close(
         pixel(&img, x, by as f64),
-        plan.cmap.colour(RED_VALUE, plan.range),
+        plan.frame.colour(RED_VALUE),
         "bar top",
     );
     let bottom = (by + bh - 1) as f64;
     assert_close(
         pixel(&img, x, bottom),
-        plan.cmap.colour(BLUE_VALUE, plan.range),
+        plan.frame.colour(BLUE_VALUE),
         "bar bottom",
     );
-    let title_top = plan.layout.title_top as u32;
+    let title_top = plan.frame.layout.title_top as u32;
     let dark = (title_top..title_top + 10)
         .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
         .filter(|&(x, y)| pixel(&img, x as f64, y as f64)[0] < 100)
@@ -485,7 +487,7 @@ fn colour_bar_and_title_are_drawn() {
 fn bad_inputs_are_errors_not_panics() {
     let mesh = brick([1, 1, 1]);
     let ok = RenderOptions3::default();
-    let err = |m: &HexMesh, v: &[f64], o: &RenderOptions3| render_hex(m, v, o).unwrap_err();
+    let err = |m: &CurvedMesh<3>, v: &[f64], o: &RenderOptions3| render_hexes(m, v, o).unwrap_err();
 
     assert!(matches!(
         err(&mesh, &[1.0, 2.0], &ok),
@@ -616,11 +618,11 @@ fn bad_inputs_are_errors_not_panics() {
             RenderError::InvalidBounds3 { .. }
         ));
     }
-    let empty = HexMesh {
+    let empty = CurvedMesh {
         nodes: vec![],
         cells: vec![],
-        faces: vec![],
-        part_names: vec![],
+        boundary: vec![],
+        ..brick([1, 1, 1])
     };
     assert!(matches!(
         err(&empty, &[], &ok),
@@ -662,35 +664,39 @@ fn edge_cases_still_render() {
     // An empty mesh with a box, a flat cell seen edge-on, a collapsed
     // cell, extreme elevations and a box that cuts through the mesh
     // behind a perspective eye.
-    let empty = HexMesh {
+    let empty = CurvedMesh {
         nodes: vec![],
         cells: vec![],
-        faces: vec![],
-        part_names: vec![],
+        boundary: vec![],
+        ..brick([1, 1, 1])
     };
     let boxed = RenderOptions3 {
         bounds: Some(([0.0; 3], [1.0; 3])),
         ..RenderOptions3::default()
     };
-    render_hex(&empty, &[], &boxed).unwrap();
-    let flat = HexMesh::structured_box([0.0; 3], [1.0, 1.0, 0.0], [1, 1, 1]);
+    render_hexes(&empty, &[], &boxed).unwrap();
+    let flat = linear(&HexMesh::structured_box(
+        [0.0; 3],
+        [1.0, 1.0, 0.0],
+        [1, 1, 1],
+    ));
     let side = Camera {
         azimuth_deg: 0.0,
         elevation_deg: 0.0,
         distance: None,
     };
-    render_hex(&flat, &[1.0], &opts(side)).unwrap();
+    render_hexes(&flat, &[1.0], &opts(side)).unwrap();
     let mut collapsed = brick([1, 1, 1]);
     collapsed.nodes = vec![[0.3; 3]; 8];
     collapsed.nodes[0] = [0.0; 3];
-    render_hex(&collapsed, &[1.0], &opts(Camera::default())).unwrap();
+    render_hexes(&collapsed, &[1.0], &opts(Camera::default())).unwrap();
     for elevation_deg in [-90.0, 90.0] {
         let camera = Camera {
             elevation_deg,
             distance: Some(1.5),
             ..Camera::default()
         };
-        render_hex(&mesh, &values, &opts(camera)).unwrap();
+        render_hexes(&mesh, &values, &opts(camera)).unwrap();
     }
     let cut = RenderOptions3 {
         camera: Camera {
@@ -700,15 +706,137 @@ fn edge_cases_still_render() {
         bounds: Some(([0.0; 3], [0.2; 3])),
         ..opts(Camera::default())
     };
-    render_hex(&brick([4, 4, 4]), &vec![1.0; 64], &cut).unwrap();
+    render_hexes(&brick([4, 4, 4]), &vec![1.0; 64], &cut).unwrap();
 }
 
 #[test]
 fn light_factor_is_ambient_for_faces_turned_from_the_light() {
-    let plan = Plan3::new(&brick([1, 1, 1]), &[1.0], &opts(from_above())).unwrap();
+    let o = opts(from_above());
+    let plan = plan_of(&brick([1, 1, 1]), &[1.0], &o);
     // From above, the light comes from above the viewer: a face seen
     // head-on is lit, and its reverse normal only gets the ambient share.
     let lit = plan.view.light_factor([0.0, 0.0, 1.0]);
     assert!(lit > 0.9 && lit <= 1.0, "{lit}");
     assert_eq!(plan.view.light_factor([0.0, 0.0, -1.0]), view::AMBIENT);
+}
+
+/// The block `[0,1]³` (or `n` cells of it) whose side x = 1 bulges out by
+/// 0.3 at y = ½: x ↦ x (1 + 1.2 y (1 − y)), exact at p = 2.
+fn bulged_block(p: usize, n: [usize; 3]) -> CurvedMesh<3> {
+    CurvedMesh::structured(p, Spacing::GaussLobatto, n, |[x, y, z]| {
+        [x * (1.0 + 1.2 * y * (1.0 - y)), y, z]
+    })
+    .unwrap()
+}
+
+#[test]
+fn bulge_of_a_curved_face_has_the_face_colour() {
+    for p in [2, 3] {
+        let mesh = bulged_block(p, [1, 1, 1]);
+        let o = opts(from_above());
+        let (img, plan) = render_decoded(&mesh, &[0.9], &o);
+        // The top face seen face-on, lit as a face with normal +z.
+        let top = expected(&plan, 0.9, [0.0, 0.0, 1.0]);
+        assert_close(pixel_of(&img, &plan, [0.5, 0.5, 1.0]), top, "centre");
+        // Right of the chord x = 1, left of the curve x = 1.3 at y = ½.
+        assert_close(pixel_of(&img, &plan, [1.15, 0.5, 1.0]), top, "bulge");
+        // Beyond the curve near a corner (x = 1.108 at y = 0.1).
+        assert_eq!(pixel_of(&img, &plan, [1.25, 0.1, 1.0]), WHITE);
+        // No line between the sub-quads: on a sub-quad border inside the
+        // face, the colour is the plain face colour.
+        let m = (SUBQUADS_PER_ORDER * p) as f64;
+        assert_close(
+            pixel_of(&img, &plan, [1.0 / m, 0.5, 1.0]),
+            top,
+            "sub-quad border",
+        );
+    }
+}
+
+#[test]
+fn face_borders_follow_the_curved_edges() {
+    // Two cells along x: the edge between their top faces is the curve
+    // x = ½ (1 + 1.2 y (1 − y)), at x = 0.65 for y = ½, where a straight
+    // edge would be at x = ½.
+    let mesh = bulged_block(2, [2, 1, 1]);
+    let values = [0.9, 1.1];
+    let o = opts(from_above());
+    let (img, plan) = render_decoded(&mesh, &values, &o);
+    assert_eq!(plan.patches.len(), 10, "two cells show ten faces");
+    let [x, y, _] = plan.to_image([0.65, 0.5, 1.0]).unwrap();
+    let line = darkest_near(&img, x, y);
+    for v in values {
+        let top = expected(&plan, v, [0.0, 0.0, 1.0]);
+        assert!(
+            brightness(line) * 10 < brightness(top) * 9,
+            "{line:?} vs {top:?}"
+        );
+    }
+    let top = expected(&plan, 0.9, [0.0, 0.0, 1.0]);
+    assert_close(pixel_of(&img, &plan, [0.5, 0.5, 1.0]), top, "chord");
+}
+
+#[test]
+fn clipping_drops_whole_curved_cells_by_their_corners() {
+    let mesh = bulged_block(2, [2, 1, 1]);
+    let values = [0.9, 1.1];
+    let clip = RenderOptions3 {
+        clip: Some(ClipPlane {
+            point: [0.6, 0.0, 0.0],
+            normal: [1.0, 0.0, 0.0],
+        }),
+        bounds: Some(([0.0; 3], [1.3, 1.0, 1.0])),
+        ..opts(from_above())
+    };
+    let (img, plan) = render_decoded(&mesh, &values, &clip);
+    // Only cell 0 (corner mean x = 0.25) is kept; it shows all six faces.
+    assert_eq!(plan.patches.len(), 6);
+    assert!(plan.patches.iter().all(|f| f.cell == 0));
+    let top0 = expected(&plan, 0.9, [0.0, 0.0, 1.0]);
+    assert_close(pixel_of(&img, &plan, [0.25, 0.5, 1.0]), top0, "kept cell");
+    assert_eq!(
+        pixel_of(&img, &plan, [0.9, 0.5, 1.0]),
+        WHITE,
+        "dropped cell"
+    );
+}
+
+#[test]
+fn every_sampled_point_is_finite_and_on_the_face() {
+    let mesh = bulged_block(3, [2, 2, 2]);
+    let patches = surface_patches(&mesh, &[true; 8], 9);
+    assert_eq!(patches.len(), 24);
+    for f in &patches {
+        assert_eq!(f.points.len(), 100);
+        assert!(f.points.iter().flatten().all(|x| x.is_finite()));
+        // Every surface point lies on a side of the (bulged) box.
+        for &[x, y, z] in &f.points {
+            let on = [x.abs(), z.abs(), (z - 1.0).abs(), y.abs(), (y - 1.0).abs()]
+                .into_iter()
+                .fold(f64::INFINITY, f64::min)
+                .min((x - (1.0 + 1.2 * y * (1.0 - y))).abs());
+            // p = 3 reproduces the quadratic bulge exactly.
+            assert!(on < 1e-12, "{:?} is not on the surface", [x, y, z]);
+        }
+    }
+}
+
+#[test]
+fn a_curved_mesh_with_a_bad_cell_is_an_error() {
+    let mesh = bulged_block(2, [1, 1, 1]);
+    let mut short = mesh.clone();
+    short.cells[0].pop();
+    assert!(matches!(
+        render_hexes(&short, &[1.0], &RenderOptions3::default()),
+        Err(RenderError::InvalidCurvedMesh { .. })
+    ));
+    // A quarter cylinder shell is drawn whole at every order.
+    for p in 1..=4 {
+        let shell = CurvedMesh::structured(p, Spacing::GaussLobatto, [2, 1, 1], |[u, v, w]| {
+            let (r, t) = (1.0 + v, 0.5 * PI * u);
+            [r * t.cos(), r * t.sin(), w]
+        })
+        .unwrap();
+        render_hexes(&shell, &[1.0, 1.1], &RenderOptions3::default()).unwrap();
+    }
 }

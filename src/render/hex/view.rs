@@ -112,24 +112,6 @@ impl View {
         }
     }
 
-    /// The colour `base` of a face with corners `corners` as lit: ambient
-    /// plus Lambert from the light, with the normal turned towards the
-    /// viewer (two-sided), so faces of inverted cells and inner faces
-    /// exposed by clipping are lit like any other.
-    pub fn shade(&self, base: [u8; 3], corners: &[[f64; 3]; 4]) -> [u8; 3] {
-        let n = quad_normal(corners);
-        let centre = scale(
-            add(add(corners[0], corners[1]), add(corners[2], corners[3])),
-            0.25,
-        );
-        let facing = if dot(n, self.to_eye(centre)) < 0.0 {
-            scale(n, -1.0)
-        } else {
-            n
-        };
-        shade_colour(base, self.light_factor(facing))
-    }
-
     /// Brightness of a face with unit normal `n` (facing the viewer).
     pub fn light_factor(&self, n: [f64; 3]) -> f64 {
         AMBIENT + (1.0 - AMBIENT) * dot(n, self.light).max(0.0)
