@@ -31,7 +31,6 @@ pub mod deform;
 pub mod driver;
 pub mod expr;
 pub mod geometry;
-pub mod hexquality;
 pub mod highorder;
 pub mod io;
 pub mod jacobian;

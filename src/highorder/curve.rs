@@ -8,7 +8,8 @@
 //! bounds of its det J, and the curved boundary is sampled against the
 //! exact shapes.
 
-use super::{certify_hex, certify_quad, check_order, nodes_1d, Basis1d, Certificate, HighOrderError, Spacing};
+use super::{check_order, nodes_1d, Basis1d, HighOrderError, Spacing};
+use crate::quality::certify::{Certificate, Certifier, CertifyOptions};
 use crate::deform::refine::{refine_parts, subdivide, RefineMesh, Subdividable};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
@@ -270,22 +271,18 @@ pub struct Curved<const D: usize> {
     pub seconds: (f64, f64),
 }
 
-/// One element's certificate (D = 2 or 3).
-pub fn certify_element<const D: usize>(p: usize, spacing: Spacing, ctrl: &[[f64; D]]) -> Result<Certificate, HighOrderError> {
-    if D == 2 {
-        let c: Vec<[f64; 2]> = ctrl.iter().map(|x| [x[0], x[1]]).collect();
-        certify_quad(p, spacing, &c)
-    } else {
-        let c: Vec<[f64; 3]> = ctrl.iter().map(|x| [x[0], x[1], x[2]]).collect();
-        certify_hex(p, spacing, &c)
-    }
-}
-
 /// Certifies every element; returns the certificates and the summary
 /// without the boundary figures.
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
-    let certs: Vec<Certificate> =
-        (0..mesh.cells.len()).into_par_iter().map(|c| certify_element(mesh.p, mesh.spacing, &mesh.cell_coords(c))).collect::<Result<_, _>>()?;
+    let certifier = Certifier::new(mesh.p, mesh.spacing)?;
+    let certs: Vec<Certificate> = (0..mesh.cells.len())
+        .into_par_iter()
+        .map(|c| {
+            let ctrl = mesh.cell_coords(c);
+            crate::mesh::element::check_nodes(mesh.p, D, ctrl.len())?;
+            Ok(certifier.certify(&ctrl, &CertifyOptions::default()))
+        })
+        .collect::<Result<_, HighOrderError>>()?;
     let invalid = certs.iter().enumerate().filter(|(_, c)| !c.valid).map(|(i, _)| i).collect();
     let q = CurvedQuality {
         order: mesh.p,
