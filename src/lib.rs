@@ -28,7 +28,6 @@ pub mod app;
 pub mod deform;
 pub mod expr;
 pub mod geometry;
-pub mod hexquality;
 pub mod highorder;
 pub mod io;
 pub mod jacobian;

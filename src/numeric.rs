@@ -1,6 +1,10 @@
 //! Small vector arithmetic on fixed-size arrays, in any dimension and the
 //! few operations special to the plane and to space. (The one-dimensional
-//! solvers the shapes use are in `geometry/solvers.rs`.)
+//! solvers the shapes use are in `geometry/solvers.rs`.) Bernstein
+//! polynomials, of which the validity certificate is made, are in
+//! [`bezier`].
+
+pub mod bezier;
 
 /// Machine epsilon, used for root-finding and convergence tolerances.
 pub const EPS: f64 = f64::EPSILON;
@@ -65,4 +69,9 @@ pub fn rot_ccw(a: [f64; 2]) -> [f64; 2] {
 /// Rotation by the angle with the given cosine and sine.
 pub fn rotate(a: [f64; 2], cos: f64, sin: f64) -> [f64; 2] {
     [cos * a[0] - sin * a[1], sin * a[0] + cos * a[1]]
+}
+
+/// a · (b × c), the determinant of the matrix with columns a, b, c.
+pub fn triple(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    dot(a, cross3(b, c))
 }

@@ -29,6 +29,7 @@
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
 use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, QuadMesh};
+use crate::numeric::{dot, unit};
 use std::collections::HashMap;
 
 /// A coarse Q1 mesh that can be subdivided: its boundary facets (edges in
@@ -555,15 +556,6 @@ fn frame_with<const D: usize>(n: [f64; D]) -> [[f64; D]; D] {
     frame
 }
 
-fn unit<const D: usize>(v: [f64; D]) -> [f64; D] {
-    let l = v.iter().map(|c| c * c).sum::<f64>().sqrt();
-    v.map(|c| c / l)
-}
-
-fn dot<const D: usize>(a: [f64; D], b: [f64; D]) -> f64 {
-    (0..D).map(|i| a[i] * b[i]).sum()
-}
-
 impl<const D: usize> RefineBoundary<D> {
     /// Settling (see [`RefineMesh::settling`]): a sliding node of a curved
     /// carrier becomes a path node aimed at the image of its place.
@@ -893,9 +885,6 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
     fn flux_points<'a>(&'a self, nodes: &'a [[f64; D]], v: &'a [[f64; D]]) -> impl Iterator<Item = ([f64; D], f64)> + 'a {
         self.mesh.flux_points(nodes, v)
     }
-    fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize> {
-        self.mesh.invalid_cells(nodes)
-    }
     fn measure(&self) -> f64 {
         self.mesh.measure()
     }
@@ -996,7 +985,7 @@ mod tests {
             assert_eq!(s.fine.nodes.len(), (3 * p + 1) * (2 * p + 1), "p = {p}");
             assert_eq!(s.fine.cells.len(), 6 * p * p);
             assert_eq!(s.fine.edges.len(), 10 * p);
-            assert!(crate::quality::invalid_cells(&s.fine, &s.fine.nodes).is_empty());
+            assert!(crate::quality::certify::invalid_cells(&s.fine.cells, &s.fine.nodes).is_empty());
             assert!((s.fine.area() - 1.0).abs() < 1e-14);
             // each element's nodes sit at its tensor positions
             for (c, el) in s.elements.iter().enumerate() {
@@ -1024,7 +1013,7 @@ mod tests {
             let s = subdivide(&coarse, &equispaced(p)).unwrap();
             assert_eq!(s.fine.nodes.len(), (2 * p + 1).pow(3), "p = {p}");
             assert_eq!(s.fine.faces.len(), 6 * 4 * p * p);
-            assert!(crate::hexquality::invalid_hex_cells(&s.fine, &s.fine.nodes).is_empty());
+            assert!(crate::quality::certify::invalid_cells(&s.fine.cells, &s.fine.nodes).is_empty());
             // every boundary facet's nodes lie on the box's surface
             for (grid, _) in &s.facets {
                 assert_eq!(grid.len(), (p + 1) * (p + 1));

@@ -288,10 +288,10 @@ impl Outputs<3, 8> for HexMesh {
         hex_mesh_quality(self)
     }
     fn scaled_jacobians(&self) -> Vec<f64> {
-        (0..self.num_cells()).map(|c| crate::hexquality::scaled_jacobian(&self.cell_coords(c))).collect()
+        (0..self.num_cells()).map(|c| crate::quality::hex_scaled_jacobian(&self.cell_coords(c))).collect()
     }
     fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
-        self.cells.iter().map(|c| crate::hexquality::hex_volume(&c.map(|n| nodes[n]))).collect()
+        self.cells.iter().map(|c| crate::quality::cell_size(&c.map(|n| nodes[n]))).collect()
     }
     fn msh(&self) -> String {
         hex_msh_string(self)

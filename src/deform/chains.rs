@@ -6,7 +6,6 @@ use super::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, 
 use crate::jacobian::edge_flux_points;
 use crate::lsfem::NodeConstraint;
 use crate::mesh::{Point2, QuadMesh};
-use crate::quality::invalid_cells;
 
 /// A maximal run of boundary edges of one part between feature nodes,
 /// parametrised by normalised arc length s ∈ [0, 1] of its start position.
@@ -433,9 +432,6 @@ impl Q1Mesh<2, 4> for QuadMesh {
     }
     fn flux_points<'a>(&'a self, nodes: &'a [Point2], v: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
         edge_flux_points(self, nodes, v)
-    }
-    fn invalid_cells(&self, nodes: &[Point2]) -> Vec<usize> {
-        invalid_cells(self, nodes)
     }
     fn measure(&self) -> f64 {
         self.area()

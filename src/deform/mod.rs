@@ -162,8 +162,11 @@ pub trait Q1Mesh<const D: usize, const N: usize>: Clone + Send + Sync {
     /// Quadrature of the boundary flux at positions `nodes` for nodal
     /// boundary velocities `v`: pairs (x, v·n dS).
     fn flux_points<'a>(&'a self, nodes: &'a [[f64; D]], v: &'a [[f64; D]]) -> impl Iterator<Item = ([f64; D], f64)> + 'a;
-    /// Cells whose Jacobian is not positive everywhere at positions `nodes`.
-    fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize>;
+    /// Cells whose Jacobian is not certified positive everywhere at
+    /// positions `nodes`.
+    fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize> {
+        crate::quality::certify::invalid_cells(self.cells(), nodes)
+    }
     /// Area or volume at the current positions.
     fn measure(&self) -> f64;
     /// Splits the boundary into the model's pieces and checks that every

@@ -17,11 +17,11 @@
 //! - A corner follows the path `(1−t) x₀ + t X(x₀)` or stays.
 
 use super::{BoundaryModel, BoundaryPart, DeformError, MoveMode, PartKind, Q1Mesh};
-use crate::hexquality::{hex_volume, invalid_hex_cells};
 use crate::jacobian::facet_flux_points;
 use crate::lsfem::Constraint;
 use crate::mesh::{HexMesh, Point3};
 use crate::numeric::{cross3 as cross, dot, sub, unit};
+use crate::quality::cell_size;
 use std::collections::HashMap;
 
 /// A planar patch of boundary faces of one part, with its affine
@@ -399,12 +399,8 @@ impl Q1Mesh<3, 8> for HexMesh {
         facet_flux_points(self.faces.iter().map(|f| f.nodes), nodes, v)
     }
 
-    fn invalid_cells(&self, nodes: &[Point3]) -> Vec<usize> {
-        invalid_hex_cells(self, nodes)
-    }
-
     fn measure(&self) -> f64 {
-        (0..self.num_cells()).map(|c| hex_volume(&self.cell_coords(c))).sum()
+        (0..self.num_cells()).map(|c| cell_size(&self.cell_coords(c))).sum()
     }
 
     fn boundary(&self, parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {

@@ -8,7 +8,8 @@
 //! bounds of its det J, and the curved boundary is sampled against the
 //! exact shapes.
 
-use super::{certify_hex, certify_quad, check_order, nodes_1d, Basis1d, Certificate, HighOrderError, Spacing};
+use super::{check_order, nodes_1d, Basis1d, HighOrderError, Spacing};
+use crate::quality::certify::{Certificate, Certifier, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
@@ -303,22 +304,18 @@ pub struct Curved<const D: usize> {
     pub seconds: (f64, f64),
 }
 
-/// One element's certificate (D = 2 or 3).
-pub fn certify_element<const D: usize>(p: usize, spacing: Spacing, ctrl: &[[f64; D]]) -> Result<Certificate, HighOrderError> {
-    if D == 2 {
-        let c: Vec<[f64; 2]> = ctrl.iter().map(|x| [x[0], x[1]]).collect();
-        certify_quad(p, spacing, &c)
-    } else {
-        let c: Vec<[f64; 3]> = ctrl.iter().map(|x| [x[0], x[1], x[2]]).collect();
-        certify_hex(p, spacing, &c)
-    }
-}
-
 /// Certifies every element; returns the certificates and the summary
 /// without the boundary figures.
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
-    let certs: Vec<Certificate> =
-        (0..mesh.cells.len()).into_par_iter().map(|c| certify_element(mesh.p, mesh.spacing, &mesh.cell_coords(c))).collect::<Result<_, _>>()?;
+    let certifier = Certifier::new(mesh.p, mesh.spacing)?;
+    let certs: Vec<Certificate> = (0..mesh.cells.len())
+        .into_par_iter()
+        .map(|c| {
+            let ctrl = mesh.cell_coords(c);
+            crate::mesh::element::check_nodes(mesh.p, D, ctrl.len())?;
+            Ok(certifier.certify(&ctrl, &CertifyOptions::default()))
+        })
+        .collect::<Result<_, HighOrderError>>()?;
     let q = summary(mesh, &certs);
     Ok((certs, q))
 }
@@ -554,7 +551,8 @@ where
     let snapped = CurvedMesh { nodes, ..slid.mesh.clone() };
     let mut certificates = slid.certificates.clone();
     let touched: Vec<usize> = (0..snapped.cells.len()).filter(|&c| snapped.cells[c].iter().any(|&n| snapped.nodes[n] != slid.mesh.nodes[n])).collect();
-    let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certify_element(snapped.p, snapped.spacing, &snapped.cell_coords(c))).collect::<Result<_, _>>()?;
+    let certifier = Certifier::new(snapped.p, snapped.spacing)?;
+    let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certifier.certify(&snapped.cell_coords(c), &CertifyOptions::default())).collect();
     // a snap that shears a thin cell stays valid but ruins it (measured:
     // a 1e-5 layer at p = 4, min scaled Jacobian 0.72 → 0.001): snapping
     // must keep every element's scaled Jacobian within SNAP_KEEP of before

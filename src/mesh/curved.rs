@@ -272,7 +272,8 @@ impl CurvedMesh<3> {
 /// test module as `scripts/deps.py` recognises one).
 pub mod tests {
     use super::*;
-    use crate::highorder::{certify_hex, certify_quad, hex_map, quad_map};
+    use crate::highorder::{hex_map, quad_map};
+    use crate::quality::certify::certify;
 
     /// Smooth non-affine maps of the unit square and cube, for test meshes
     /// (also of the file tests).
@@ -293,7 +294,7 @@ pub mod tests {
         assert_eq!(m.cells.len(), 6);
         assert_eq!(m.boundary.len(), 2 * (2 + 3));
         for c in 0..m.cells.len() {
-            assert!(certify_quad(3, m.spacing, &m.cell_coords(c)).unwrap().valid);
+            assert!(certify(3, m.spacing, &m.cell_coords(c)).unwrap().valid);
         }
         // bottom edge of cell 0 runs along +x: its nodes are the cell's
         // first row; left edge runs downwards (domain on the left)
@@ -307,7 +308,7 @@ pub mod tests {
         let h = CurvedMesh::<3>::structured(2, Spacing::GaussLobatto, [2, 1, 1], bend3).unwrap();
         h.validate().unwrap();
         assert_eq!(h.boundary.len(), 2 * (1 + 2 + 2));
-        assert!(certify_hex(2, h.spacing, &h.cell_coords(1)).unwrap().valid);
+        assert!(certify(2, h.spacing, &h.cell_coords(1)).unwrap().valid);
     }
 
     /// Resampling a Gauss–Lobatto mesh keeps the geometry: the equispaced

@@ -235,13 +235,13 @@ mod tests {
         }
         assert!(m.cells.iter().enumerate().all(|(c, _)| m.cell_area(c) < 0.0));
         assert_eq!(m.orient_counter_clockwise(), 12);
-        assert!(crate::quality::invalid_cells(&m, &m.nodes).is_empty());
+        assert!(crate::quality::certify::invalid_cells(&m.cells, &m.nodes).is_empty());
         // one clockwise cell in a counter-clockwise mesh (as from a second
         // Gmsh surface with the other normal): turned
         let mut one = ccw.clone();
         one.cells[5].reverse();
         assert_eq!(one.orient_counter_clockwise(), 1);
-        assert!(crate::quality::invalid_cells(&one, &one.nodes).is_empty());
+        assert!(crate::quality::certify::invalid_cells(&one.cells, &one.nodes).is_empty());
         // a cell folded through its neighbours (its node order agrees with
         // theirs): not turned, still invalid
         let mut folded = ccw.clone();
@@ -252,7 +252,7 @@ mod tests {
             folded.nodes[n][0] -= 1.0;
         }
         assert_eq!(folded.orient_counter_clockwise(), 0);
-        assert!(crate::quality::invalid_cells(&folded, &folded.nodes).contains(&5));
+        assert!(crate::quality::certify::invalid_cells(&folded.cells, &folded.nodes).contains(&5));
     }
 }
 
@@ -474,6 +474,7 @@ impl HexMesh {
 #[cfg(test)]
 mod hex_tests {
     use super::*;
+    use crate::numeric::{cross3, dot, sub, triple};
 
     #[test]
     fn brick_counts_and_outward_faces() {
@@ -484,19 +485,11 @@ mod hex_tests {
         let centre = [1.0, 0.5, 0.5];
         for f in &m.faces {
             let p = f.nodes.map(|n| m.nodes[n]);
-            let (a, b) = (sub3(p[2], p[0]), sub3(p[3], p[1]));
-            let n = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-            let out = sub3(p[0], centre);
-            assert!(n[0] * out[0] + n[1] * out[1] + n[2] * out[2] > 0.0, "face {f:?} points inward");
+            let n = cross3(sub(p[2], p[0]), sub(p[3], p[1]));
+            assert!(dot(n, sub(p[0], centre)) > 0.0, "face {f:?} points inward");
         }
         // the first cell is positively oriented: (p1−p0)·((p3−p0)×(p4−p0)) > 0
         let p = m.cell_coords(0);
-        let (a, b, c) = (sub3(p[1], p[0]), sub3(p[3], p[0]), sub3(p[4], p[0]));
-        let det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-        assert!(det > 0.0);
-    }
-
-    fn sub3(a: Point3, b: Point3) -> Point3 {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+        assert!(triple(sub(p[1], p[0]), sub(p[3], p[0]), sub(p[4], p[0])) > 0.0);
     }
 }

@@ -235,7 +235,7 @@ fn cube_on_ball_with_a_ball_interface_is_valid_and_near_f() {
     // cells the interface sphere (centre (0, 0, 1.1), radius 0.45) crosses
     // are smaller than those far below it
     let r = |p: [f64; 3]| p[0].hypot(p[1]).hypot(p[2] - 1.1);
-    let vol = |k: usize| deformesh::hexquality::hex_volume(&d.mesh.cell_coords(k));
+    let vol = |k: usize| deformesh::quality::cell_size(&d.mesh.cell_coords(k));
     let on = mean((0..d.mesh.num_cells()).filter_map(|k| {
         let p = d.mesh.cell_coords(k);
         (p.iter().any(|q| r(*q) < 0.45) && p.iter().any(|q| r(*q) > 0.45)).then(|| vol(k))

@@ -41,7 +41,7 @@ pub fn floats(v: &Value) -> Vec<f64> {
 }
 
 /// Our certificates per element, from the written file.
-pub fn our_certificates<const D: usize>(file: &Path) -> Vec<deformesh::highorder::Certificate> {
+pub fn our_certificates<const D: usize>(file: &Path) -> Vec<deformesh::quality::certify::Certificate> {
     let mesh = deformesh::mesh::CurvedMesh::<D>::read_msh(file).unwrap();
     deformesh::highorder::curve::certify_mesh(&mesh).unwrap().0
 }

@@ -6,7 +6,8 @@
 
 use std::path::Path;
 
-use deformesh::hexquality::{det_j_bounds, hex_volume, invalid_hex_cells, scaled_jacobian};
+use deformesh::quality::certify::{det_j_bounds, invalid_cells};
+use deformesh::quality::{cell_size as hex_volume, hex_scaled_jacobian as scaled_jacobian};
 use deformesh::io::msh::{write_hex_msh, DOMAIN_NAME};
 use deformesh::io::vtu::{write_hex_vtu, VTK_HEXAHEDRON};
 use deformesh::mesh::HexMesh;
@@ -99,7 +100,7 @@ fn gmsh_reads_our_hex_msh_with_the_expected_jacobians() {
         worst < 1e-12,
         "Gmsh's det J bounds differ from ours/8 by {worst:e}"
     );
-    assert!(invalid_hex_cells(&mesh, &mesh.nodes).is_empty());
+    assert!(invalid_cells(&mesh.cells, &mesh.nodes).is_empty());
 }
 
 #[test]
@@ -180,10 +181,10 @@ fn gmsh_min_det_j(mesh: &HexMesh) -> (f64, f64) {
 }
 
 /// Where one set of Bézier coefficients is a loose bound, Gmsh subdivides
-/// (as our `hex_is_valid` does), so its minDetJac is tighter than our
+/// (as our `linear_is_valid` does), so its minDetJac is tighter than our
 /// `det_j_bounds`: for a valid hex with a negative coefficient, Gmsh
 /// reports a positive value; for a hex that is invalid inside although
-/// all corners are positive, a negative one, as `invalid_hex_cells` says.
+/// all corners are positive, a negative one, as `invalid_cells` says.
 #[test]
 fn gmsh_refines_loose_bezier_bounds_like_hex_is_valid() {
     let valid = one_cell([
@@ -204,7 +205,7 @@ fn gmsh_refines_loose_bezier_bounds_like_hex_is_valid() {
         hi / 8.0
     );
     assert!(lo < 0.0 && g_lo > 0.0);
-    assert!(invalid_hex_cells(&valid, &valid.nodes).is_empty());
+    assert!(invalid_cells(&valid.cells, &valid.nodes).is_empty());
 
     let invalid = one_cell([
         [-0.3, 0.6, 0.8],
@@ -227,7 +228,7 @@ fn gmsh_refines_loose_bezier_bounds_like_hex_is_valid() {
         g_lo < 0.0 && g_lo > lo / 8.0,
         "Gmsh's bound is the tighter one"
     );
-    assert_eq!(invalid_hex_cells(&invalid, &invalid.nodes), vec![0]);
+    assert_eq!(invalid_cells(&invalid.cells, &invalid.nodes), vec![0]);
 }
 
 /// A whole 3D `run` (the quarter ball at 6³): Gmsh opens mesh.msh, finds

@@ -12,11 +12,12 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use deformesh::highorder::{
-    certify_hex, certify_quad, gmsh_hex_order, gmsh_line_order, gmsh_quad_order, hex_map, quad_map,
-    vtk_hex_order, vtk_quad_order, Certificate, Spacing,
+    gmsh_hex_order, gmsh_line_order, gmsh_quad_order, hex_map, quad_map, vtk_hex_order,
+    vtk_quad_order, Spacing,
 };
 use deformesh::io::vtu::{VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL, VTK_QUAD};
 use deformesh::mesh::CurvedMesh;
+use deformesh::quality::certify::{certify, Certificate};
 use serde_json::{json, Value};
 
 use crate::common;
@@ -72,7 +73,7 @@ fn curved_hexes(p: usize, seed: u64) -> CurvedMesh<3> {
 }
 
 /// A p = 2 quad with det J > 0 at all nine nodes but < 0 between them
-/// (see `highorder::bezier` tests).
+/// (see `quality::certify` tests).
 fn invalid_quad() -> CurvedMesh<2> {
     let mut m = CurvedMesh::<2>::structured(2, Spacing::Equispaced, [1, 1], |x| x).unwrap();
     m.nodes[1][0] -= 0.14;
@@ -273,7 +274,7 @@ fn gmsh_maps_our_curved_quads_like_we_do() {
             let (x, j) = quad_map(p, m.spacing, ctrl, xi).unwrap();
             (x, j[0][0] * j[1][1] - j[0][1] * j[1][0])
         };
-        let cert = |ctrl: &[[f64; 2]]| certify_quad(p, m.spacing, ctrl).unwrap();
+        let cert = |ctrl: &[[f64; 2]]| certify(p, m.spacing, ctrl).unwrap();
         let (dmin, dmax) = compare_gmsh(rep, m, &f.pts2, map, cert);
         eprintln!(
             "quads p={p}: largest rel. difference minDetJac {dmin:.2e}, maxDetJac {dmax:.2e}"
@@ -307,7 +308,7 @@ fn gmsh_maps_our_curved_hexes_like_we_do() {
                 + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]);
             (x, det)
         };
-        let cert = |ctrl: &[[f64; 3]]| certify_hex(p, m.spacing, ctrl).unwrap();
+        let cert = |ctrl: &[[f64; 3]]| certify(p, m.spacing, ctrl).unwrap();
         let (dmin, dmax) = compare_gmsh(rep, m, &f.pts3, map, cert);
         eprintln!(
             "hexes p={p}: largest rel. difference minDetJac {dmin:.2e}, maxDetJac {dmax:.2e}"
@@ -330,7 +331,7 @@ fn gmsh_maps_our_curved_hexes_like_we_do() {
 fn gmsh_and_we_both_find_the_element_invalid_between_its_nodes() {
     let f = fixture();
     let rep = &f.report["gmsh"][8];
-    let cert = certify_quad(2, Spacing::Equispaced, &f.invalid.cell_coords(0)).unwrap();
+    let cert = certify(2, Spacing::Equispaced, &f.invalid.cell_coords(0)).unwrap();
     let gmin = floats(&rep["minDetJac"])[0];
     eprintln!(
         "invalid quad: gmsh minDetJac {gmin:e}, ours/4 [{:e}, {:e}]",
