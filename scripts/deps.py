@@ -15,7 +15,7 @@ and the edges that break the target layering of issue 12:
   method       deform (Alg. 1) <- refine (Alg. 2) <- highorder (Alg. 3)
                core, and only down that chain
   io / render  io render                              core only
-  core         lsfem solve mesh geometry geometry3 numeric expr jacobian quality hexquality
+  core         lsfem solve mesh geometry numeric expr jacobian quality
                core only, and no cycles
 
 Options: --mermaid prints a mermaid graph instead of the text listing;
@@ -34,7 +34,7 @@ LAYER = {
     "io": "io/render", "render": "io/render",
 }
 CORE = ["lsfem", "solve", "mesh", "geometry", "geometry3", "numeric", "expr",
-        "jacobian", "quality", "hexquality"]
+        "jacobian", "quality"]
 for m in CORE:
     LAYER[m] = "core"
 METHOD = ["deform", "refine", "highorder"]  # Algorithms 1, 2, 3

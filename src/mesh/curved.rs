@@ -272,7 +272,7 @@ impl CurvedMesh<3> {
 /// test module as `scripts/deps.py` recognises one).
 pub mod tests {
     use super::*;
-    use crate::highorder::{hex_map, quad_map};
+    use crate::mesh::element::{hex_map, quad_map};
     use crate::quality::certify::certify;
 
     /// Smooth non-affine maps of the unit square and cube, for test meshes

@@ -35,6 +35,7 @@ use crate::mesh::element::order::HEX_CORNERS;
 use crate::mesh::CurvedMesh;
 use raster::{distance_to_segment, edge_blend, Canvas, EdgeStyle};
 use surface::{surface_faces, HEX_FACES};
+use crate::numeric::{add, cross3 as cross, dot, scale, sub};
 use view::{shade_colour, View};
 
 /// Each pixel is rasterised as `SUPERSAMPLE × SUPERSAMPLE` samples: 3 gives
@@ -238,7 +239,7 @@ impl HexPlan {
 /// the side test would be meaningless.
 fn validate_clip(clip: &ClipPlane) -> Result<(), RenderError> {
     let finite = clip.point.iter().chain(&clip.normal).all(|x| x.is_finite());
-    if finite && view::dot(clip.normal, clip.normal) > 0.0 {
+    if finite && dot(clip.normal, clip.normal) > 0.0 {
         Ok(())
     } else {
         Err(RenderError::InvalidClipPlane {
@@ -289,9 +290,9 @@ fn kept_cells(mesh: &CurvedMesh<3>, clip: Option<&ClipPlane>) -> Vec<bool> {
         .map(|cell| {
             let corners = corner_nodes(cell, mesh.p);
             let c = corners.iter().fold([0.0; 3], |c, &n| {
-                view::add(c, view::scale(mesh.nodes[n], 0.125))
+                add(c, scale(0.125, mesh.nodes[n]))
             });
-            view::dot(view::sub(c, clip.point), clip.normal) <= 0.0
+            dot(sub(c, clip.point), clip.normal) <= 0.0
         })
         .collect()
 }
@@ -365,7 +366,7 @@ fn sample_face(
                 for (b, &wb) in w[1].iter().enumerate().filter(|(_, w)| **w != 0.0) {
                     for (a, &wa) in w[0].iter().enumerate().filter(|(_, w)| **w != 0.0) {
                         let y = nodes[cell[a + q * b + q * q * c]];
-                        x = view::add(x, view::scale(y, wa * wb * wc));
+                        x = add(x, scale(wa * wb * wc, y));
                     }
                 }
             }
@@ -448,9 +449,9 @@ fn grid_normals(points: &[[f64; 3]], m: usize) -> Vec<[f64; 3]> {
     let mut normals = Vec::with_capacity(points.len());
     for l in 0..=m {
         for k in 0..=m {
-            let du = view::sub(at((k + 1).min(m), l), at(k.saturating_sub(1), l));
-            let dv = view::sub(at(k, (l + 1).min(m)), at(k, l.saturating_sub(1)));
-            normals.push(view::normalise(view::cross(du, dv)));
+            let du = sub(at((k + 1).min(m), l), at(k.saturating_sub(1), l));
+            let dv = sub(at(k, (l + 1).min(m)), at(k, l.saturating_sub(1)));
+            normals.push(view::normalise(cross(du, dv)));
         }
     }
     normals
@@ -467,16 +468,13 @@ fn sub_quad_light(
     ids: [usize; 4],
 ) -> [f64; 4] {
     let world = ids.map(|i| points[i]);
-    let centre = view::scale(
-        view::add(view::add(world[0], world[1]), view::add(world[2], world[3])),
-        0.25,
-    );
-    let away = view::dot(view::quad_normal(&world), plan.view.to_eye(centre)) < 0.0;
+    let centre = scale(0.25, add(add(world[0], world[1]), add(world[2], world[3])));
+    let away = dot(view::quad_normal(&world), plan.view.to_eye(centre)) < 0.0;
     // Corner normals point to the same side as the sub-quad's own normal
     // (both follow the grid's orientation), so one flip serves all four.
     ids.map(|i| {
         let n = if away {
-            view::scale(normals[i], -1.0)
+            scale(-1.0, normals[i])
         } else {
             normals[i]
         };

@@ -390,42 +390,6 @@ fn a_shape_that_does_not_match_the_mesh_is_refused() {
     assert!(e.contains("shape_tolerance must be a positive number"), "{e}");
 }
 
-/// A hex boundary layer on the cylinder r = 0.5 (first cell `first`,
-/// growth 1.2, thickness 0.08) in [-2,2]², extruded over z ∈ [0, 1] in two
-/// layers, made by the real Gmsh; groups wall, farfield, bottom, top.
-const EXTRUDED_BL: &str = r#"
-import math, sys, gmsh
-first, wall_size, far_size, out = float(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
-gmsh.initialize(); gmsh.option.setNumber("General.Terminal", 0)
-gmsh.option.setNumber("Mesh.SaveAll", 0); gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-g = gmsh.model.geo
-L, r = 2.0, 0.5
-c0 = g.addPoint(0, 0, 0)
-sq = [g.addPoint(x, y, 0, far_size) for x, y in [(-L, -L), (L, -L), (L, L), (-L, L)]]
-ci = [g.addPoint(r * math.cos(k * math.pi / 2), r * math.sin(k * math.pi / 2), 0, wall_size) for k in range(4)]
-sl = [g.addLine(sq[k], sq[(k + 1) % 4]) for k in range(4)]
-arcs = [g.addCircleArc(ci[k], c0, ci[(k + 1) % 4]) for k in range(4)]
-s = g.addPlaneSurface([g.addCurveLoop(sl), g.addCurveLoop(arcs)])
-g.synchronize()
-f = gmsh.model.mesh.field
-bl = f.add("BoundaryLayer")
-f.setNumbers(bl, "CurvesList", arcs); f.setNumber(bl, "Size", first); f.setNumber(bl, "Ratio", 1.2)
-f.setNumber(bl, "Thickness", 0.08); f.setNumber(bl, "Quads", 1); f.setAsBoundaryLayer(bl)
-g.mesh.setRecombine(2, s)
-ex = g.extrude([(2, s)], 0, 0, 1.0, numElements=[1, 1], heights=[0.4, 1.0], recombine=True)
-g.synchronize()
-top, vol, lat = ex[0][1], ex[1][1], [t for d, t in ex[2:]]
-gmsh.model.addPhysicalGroup(2, lat[4:8], name="wall")
-gmsh.model.addPhysicalGroup(2, lat[0:4], name="farfield")
-gmsh.model.addPhysicalGroup(2, [s], name="bottom")
-gmsh.model.addPhysicalGroup(2, [top], name="top")
-gmsh.model.addPhysicalGroup(3, [vol], name="fluid")
-gmsh.option.setNumber("Mesh.Algorithm", 6); gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
-gmsh.option.setNumber("Mesh.RecombineAll", 1)
-gmsh.model.mesh.generate(3)
-gmsh.write(out); gmsh.finalize()
-"#;
-
 const CYLINDER_3D: &str = r#"
 [[group]]
 name = "wall"
@@ -439,14 +403,21 @@ name = "bottom"
 kind = "slip"
 "#;
 
-/// The extruded boundary-layer mesh, written by Gmsh into `dir`.
+/// The cylinder boundary-layer mesh extruded into hexes
+/// (tests/python/cylinder_bl.py: 1 along z in two layers; groups wall,
+/// farfield, bottom, top), written by Gmsh into `dir`.
 fn extruded_bl(dir: &Path, first: f64, wall_size: f64, far_size: f64) -> PathBuf {
-    let script = dir.join("extruded_bl.py");
-    std::fs::write(&script, EXTRUDED_BL).unwrap();
     let out = dir.join("extruded_bl.msh");
-    let run = std::process::Command::new(common::python()).arg(&script).args([first.to_string(), wall_size.to_string(), far_size.to_string()]).arg(&out).output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    cylinder_bl(&out, first, wall_size, &["--far".into(), far_size.to_string(), "--extrude".into()]);
     out
+}
+
+/// Runs tests/python/cylinder_bl.py; its standard output.
+fn cylinder_bl(out: &Path, first: f64, wall_size: f64, options: &[String]) -> Vec<u8> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/cylinder_bl.py");
+    let run = std::process::Command::new(common::python()).arg(script).args([first.to_string(), wall_size.to_string()]).arg(out).args(options).output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    run.stdout
 }
 
 #[test]
@@ -508,21 +479,14 @@ fn wall_nodes_pinned_off_the_shape_by_fixed_neighbours_are_refused() {
     assert!(r.quality.boundary_node_distance < 1e-10, "{:e}", r.quality.boundary_node_distance);
 }
 
-/// The 2D boundary-layer mesh of tests/python/bl2d.py (circle r = 0.5,
-/// groups wall, farfield), written by Gmsh into `dir`; with `order`, also
+/// The 2D cylinder boundary-layer mesh of tests/python/cylinder_bl.py
+/// (groups wall, farfield), written by Gmsh into `dir`; with `order`, also
 /// Gmsh's own `setOrder(order)` figures on the same mesh and CAD.
 fn bl2d(dir: &Path, first: f64, wall_size: f64, order: Option<usize>) -> (PathBuf, Option<serde_json::Value>) {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/bl2d.py");
     let out = dir.join(format!("bl2d_{first:e}_{wall_size}.msh"));
-    let mut cmd = std::process::Command::new(common::python());
-    cmd.arg(script).args([first.to_string(), wall_size.to_string()]).arg(&out);
-    if let Some(p) = order {
-        cmd.arg(p.to_string());
-    }
-    let run = cmd.output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let gmsh = order.map(|_| serde_json::from_slice(&run.stdout).unwrap());
-    (out, gmsh)
+    let options: Vec<String> = order.map(|p| vec!["--order".into(), p.to_string()]).unwrap_or_default();
+    let stdout = cylinder_bl(&out, first, wall_size, &options);
+    (out, order.map(|_| serde_json::from_slice(&stdout).unwrap()))
 }
 
 /// The longest wall edge of a linear 2D mesh: the h of the boundary.

@@ -1,5 +1,6 @@
 //! The camera: projecting world points to the screen, and shading faces.
 
+use crate::numeric::{add, cross3 as cross, dot, norm, scale, sub};
 use super::Camera;
 use crate::render::RenderError;
 
@@ -54,7 +55,7 @@ impl View {
         // straight down or up (where z × back vanishes).
         let right = [az.cos(), az.sin(), 0.0];
         let up = cross(back, right);
-        let centre = scale(add(lo, hi), 0.5);
+        let centre = scale(0.5, add(lo, hi));
         let radius = 0.5 * norm(sub(hi, lo));
         let eye = match camera.distance {
             None => None,
@@ -63,8 +64,8 @@ impl View {
         };
         let l = LIGHT;
         let light = normalise(add(
-            add(scale(right, l[0]), scale(up, l[1])),
-            scale(back, l[2]),
+            add(scale(l[0], right), scale(l[1], up)),
+            scale(l[2], back),
         ));
         Ok(View {
             right,
@@ -108,7 +109,7 @@ impl View {
     pub(crate) fn to_eye(&self, p: [f64; 3]) -> [f64; 3] {
         match self.eye {
             None => self.back,
-            Some(eye) => normalise(sub(add(self.centre, scale(self.back, eye)), p)),
+            Some(eye) => normalise(sub(add(self.centre, scale(eye, self.back)), p)),
         }
     }
 
@@ -136,39 +137,11 @@ pub(crate) fn quad_area(p: &[[f64; 3]; 4]) -> f64 {
     0.5 * norm(cross(sub(p[2], p[0]), sub(p[3], p[1])))
 }
 
-pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
-    [a[0] * k, a[1] * k, a[2] * k]
-}
-
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
 /// `a` scaled to unit length, or zero if it has none.
 pub(crate) fn normalise(a: [f64; 3]) -> [f64; 3] {
     let n = norm(a);
     if n > 0.0 {
-        scale(a, 1.0 / n)
+        scale(1.0 / n, a)
     } else {
         [0.0; 3]
     }
