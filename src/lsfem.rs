@@ -112,7 +112,7 @@ const NONE: u32 = u32::MAX;
 /// quarter ball, blocks of 128 or 1024 cells halved the assembly time
 /// against single cells (each colour then streamed the whole matrix).
 const CELLS_PER_BLOCK: usize = 512;
-/// Gauss points on [0,1]: 1/2 ∓ 1/(2√3), weight 1/2 each.
+/// Gauss points on `[0,1]`: 1/2 ∓ 1/(2√3), weight 1/2 each.
 pub const GAUSS: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
 /// Largest number of unknowns of one cell (a hexahedron: 8 × 3).
 const MAX_LOCAL: usize = 24;
@@ -132,7 +132,7 @@ pub fn q1_corner(a: usize, d: usize) -> f64 {
     corner(a, d)
 }
 
-/// Shape functions of the reference cell [0,1]^D at ξ.
+/// Shape functions of the reference cell `[0,1]^D` at ξ.
 pub fn q1_shape<const D: usize, const N: usize>(xi: [f64; D]) -> [f64; N] {
     std::array::from_fn(|a| (0..D).map(|d| if corner(a, d) == 1.0 { xi[d] } else { 1.0 - xi[d] }).product())
 }
@@ -207,7 +207,7 @@ fn det_inverse<const D: usize>(j: &[[f64; D]; D]) -> (f64, [[f64; D]; D]) {
     (det, inv)
 }
 
-/// Tensor Gauss points (2 per direction) of [0,1]^D with their weights.
+/// Tensor Gauss points (2 per direction) of `[0,1]^D` with their weights.
 pub fn gauss_points<const D: usize>() -> impl Iterator<Item = ([f64; D], f64)> {
     (0..1usize << D).map(|k| (std::array::from_fn(|d| GAUSS[(k >> d) & 1]), 1.0 / (1 << D) as f64))
 }

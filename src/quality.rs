@@ -5,7 +5,7 @@
 //!
 //! Definitions (reported with the numbers):
 //! - det J is the Jacobian determinant of the bilinear or trilinear map
-//!   from the reference cell [0,1]^d, bounded over a cell by its Bernstein
+//!   from the reference cell `[0,1]^d`, bounded over a cell by its Bernstein
 //!   coefficients ([`certify::det_j_bounds`]; for a quad they are the
 //!   corner values). (Gmsh's reference cell is [−1,1]^d, so its
 //!   `minDetJac` is ours divided by 2^d.)
@@ -31,7 +31,7 @@ fn corner_edges(p: &[Point2; 4], a: usize) -> (Point2, Point2) {
     (sub(p[(a + 1) % 4], p[a]), sub(p[(a + 3) % 4], p[a]))
 }
 
-/// det J of the bilinear map at the four corners (reference [0,1]²).
+/// det J of the bilinear map at the four corners (reference `[0,1]²`).
 pub fn corner_jacobians(p: &[Point2; 4]) -> [f64; 4] {
     std::array::from_fn(|a| {
         let (e1, e2) = corner_edges(p, a);
@@ -94,7 +94,7 @@ pub fn hex_scaled_jacobian(p: &[Point3; 8]) -> f64 {
 }
 
 /// The (signed) size of a linear cell, area or volume: the integral of
-/// det J over [0,1]^D. The 2^D-point Gauss rule integrates degree 3 in
+/// det J over `[0,1]^D`. The 2^D-point Gauss rule integrates degree 3 in
 /// each variable exactly, so it is exact for det J (degree D − 1 in each).
 pub fn cell_size<const D: usize, const N: usize>(p: &[[f64; D]; N]) -> f64 {
     gauss_points::<D>().map(|(xi, w)| w * q1_eval(p, xi).1).sum()
@@ -154,7 +154,7 @@ pub struct MeshQuality {
     pub cells: usize,
     /// Number of nodes.
     pub nodes: usize,
-    /// det J over all corners, reference square [0,1]².
+    /// det J over all corners, reference square `[0,1]²`.
     pub det_j: Range,
     /// Per-cell minimum scaled Jacobian (corner-angle sine), over cells.
     pub scaled_jacobian: Range,

@@ -1,7 +1,7 @@
 //! The application layer: what a user of the tool touches. Case files
 //! ([`case`]), geometry files that bind a Gmsh mesh's groups to shapes
 //! ([`bind`]), the two jobs `run` and `curve` with their reports and output
-//! folders ([`driver`]), and the step benchmark ([`bench`]).
+//! folders ([`driver`]), and the step benchmark ([`bench`](mod@bench)).
 //!
 //! Everything here sits above the method (`deform`, `refine`,
 //! `highorder`) and the core; nothing below imports it.

@@ -221,7 +221,7 @@ pub struct CurvedQuality {
     /// Nodes.
     pub nodes: usize,
     /// Certified lower bound of det J over all elements (reference
-    /// [0,1]^d; Gmsh's [−1,1]^d gives 2^−d of it).
+    /// `[0,1]^d`; Gmsh's `[−1,1]^d` gives 2^−d of it).
     pub min_det_j: f64,
     /// A value of det J actually attained, at most this much above the bound.
     pub min_det_j_attained: f64,

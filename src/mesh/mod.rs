@@ -1,6 +1,6 @@
-//! The meshes: linear quad and hex meshes ([`linear`]), the mesh of any
+//! The meshes: linear quad and hex meshes (`linear`), the mesh of any
 //! order ([`curved`]) and its Lagrange element ([`element`]), plus the
-//! atomic file write ([`file`]) that the readers, writers and renderers
+//! atomic file write ([`file`](mod@file)) that the readers, writers and renderers
 //! share. Everything above the core (io, render, the method) reads its
 //! mesh types from here, so no layer needs another one's types.
 

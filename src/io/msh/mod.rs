@@ -1,6 +1,6 @@
 //! Gmsh MSH 4.1 files of quad and hex meshes of any order: one reader for
-//! ASCII and binary files ([`read`]), meshes made of what it read
-//! ([`build`]), and one writer ([`write`]).
+//! ASCII and binary files (`read`), meshes made of what it read
+//! (`build`), and one writer ([`write`]).
 //!
 //! Layout written: every boundary part becomes an entity of the boundary
 //! dimension (a curve in 2D, a surface in 3D) carrying a physical group of
