@@ -29,7 +29,7 @@
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
 use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, QuadMesh};
-use crate::numeric::{dot, unit};
+use crate::numeric::{dist2, dot, norm, unit};
 use std::collections::HashMap;
 
 /// A coarse Q1 mesh that can be subdivided: its boundary facets (edges in
@@ -593,7 +593,7 @@ impl<const D: usize> RefineBoundary<D> {
     /// band along the curved walls (measured on the h = 0.05 cylinder layer
     /// at p = 3: the whole-mesh settling doubled Algorithm 2's time).
     fn hold_beyond_band<const N: usize>(&mut self, cells: &[[usize; N]]) {
-        let offset = |i: usize| self.targets[i].map_or(0.0, |(to, _)| (0..D).map(|k| (to[k] - self.start[i][k]).powi(2)).sum::<f64>().sqrt());
+        let offset = |i: usize| self.targets[i].map_or(0.0, |(to, _)| dist2(to, self.start[i]).sqrt());
         let n = self.roles.len();
         let radius = SETTLE_BAND * (0..n).map(offset).fold(0.0, f64::max);
         // node → cells
@@ -625,8 +625,7 @@ impl<const D: usize> RefineBoundary<D> {
             let from = self.start[seed[i]];
             for &c in &of[first[i]..first[i + 1]] {
                 for &v in &cells[c] {
-                    let d = (0..D).map(|k| (self.start[v][k] - from[k]).powi(2)).sum::<f64>().sqrt();
-                    if seed[v] == usize::MAX && d <= radius {
+                    if seed[v] == usize::MAX && dist2(self.start[v], from).sqrt() <= radius {
                         seed[v] = seed[i];
                         queue.push_back(v);
                     }
@@ -655,8 +654,8 @@ impl<const D: usize> RefineBoundary<D> {
             let speed = |x: f64| {
                 let mut q = s;
                 q[k] = x;
-                let t = self.image_tangent(c, q, k);
-                dot(t, t).sqrt()
+                // the image is Γ_t at t = 1
+                norm(self.tangent(c, q, 1.0, k))
             };
             // composite 5-point Gauss–Legendre on 4 pieces of [0, x]
             let length = |x: f64| {
@@ -682,16 +681,6 @@ impl<const D: usize> RefineBoundary<D> {
         out
     }
 
-    /// d/ds_k of the image X(P₀(s)) of carrier `c`, by central differences.
-    fn image_tangent(&self, c: usize, s: [f64; 2], k: usize) -> [f64; D] {
-        let h = 1e-6;
-        let (mut a, mut b) = (s, s);
-        a[k] -= h;
-        b[k] += h;
-        let (pa, pb) = (self.carrier_point(c, a, 1.0).0, self.carrier_point(c, b, 1.0).0);
-        std::array::from_fn(|i| (pb[i] - pa[i]) / (2.0 * h))
-    }
-
     fn image(&self, part: Option<usize>, p: [f64; D]) -> [f64; D] {
         part.and_then(|k| self.parts[k].image(p)).unwrap_or(p)
     }
@@ -707,16 +696,17 @@ impl<const D: usize> RefineBoundary<D> {
 
     /// Tangents of Γ_t at s (one or two), by central differences.
     fn tangents(&self, c: usize, s: [f64; 2], t: f64) -> Vec<[f64; D]> {
+        (0..self.carriers[c].dims()).map(|k| self.tangent(c, s, t, k)).collect()
+    }
+
+    /// d/ds_k of Γ_t at s, by central differences.
+    fn tangent(&self, c: usize, s: [f64; 2], t: f64, k: usize) -> [f64; D] {
         let h = 1e-6;
-        (0..self.carriers[c].dims())
-            .map(|k| {
-                let (mut a, mut b) = (s, s);
-                a[k] -= h;
-                b[k] += h;
-                let (pa, pb) = (self.carrier_point(c, a, t).0, self.carrier_point(c, b, t).0);
-                std::array::from_fn(|i| (pb[i] - pa[i]) / (2.0 * h))
-            })
-            .collect()
+        let (mut a, mut b) = (s, s);
+        a[k] -= h;
+        b[k] += h;
+        let (pa, pb) = (self.carrier_point(c, a, t).0, self.carrier_point(c, b, t).0);
+        std::array::from_fn(|i| (pb[i] - pa[i]) / (2.0 * h))
     }
 
     fn constraint(&self, i: usize, t: f64, f: f64) -> Constraint<D> {
@@ -880,10 +870,11 @@ fn off_plane<const D: usize>(c: &[[f64; D]], n: [f64; 3]) -> f64 {
 impl<M, const D: usize> RefineMesh<M, D> {
     /// The settling pass after a sliding run: the mesh starts at `nodes`
     /// (where sliding left it) and every new node of a curved carrier
-    /// follows a straight path from there to its intended point
-    /// X(P₀(s₀)), the image of its place s₀ on the flat coarse facet or
-    /// edge (equispaced or Gauss–Lobatto, as subdivided), with Dirichlet
-    /// data; old nodes stay, nodes of flat walls slide in them.
+    /// follows a straight path from there to its place, with Dirichlet
+    /// data: by default the point at its fraction (equispaced or
+    /// Gauss–Lobatto, as subdivided) of the arc length of the carrier's
+    /// image ([`Settle`]); old nodes stay, nodes of flat walls slide in
+    /// them, and nodes far from every moved node are held.
     ///
     /// Why: sliding lets the nodes drift along the curve (a p = 3 edge's
     /// nodes at 0.330 and 0.670 instead of 1/3 and 2/3), which costs the

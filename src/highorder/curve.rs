@@ -443,8 +443,8 @@ where
     }
     // every node of a curved boundary element, the old (fixed) ones too:
     // they were not moved, so only this shows a vertex off its shape
-    quality.boundary_node_distance = moved_distance.max(node_distance(&mesh, &parts2));
     quality.boundary_error = boundary_errors(&mesh, &parts2, opts.samples)?;
+    quality.boundary_node_distance = quality.boundary_error.values().map(|e| e.nodes).fold(moved_distance, f64::max);
     quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
     Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
@@ -588,7 +588,7 @@ const SNAP_KEEP: f64 = 0.9;
 
 /// The largest distance between corresponding points of `a` and `b`.
 fn largest_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max)
+    a.iter().zip(b).map(|(x, y)| crate::numeric::dist2(*x, *y).sqrt()).fold(0.0, f64::max)
 }
 
 /// Per moving (or curved slip) part, the largest relative change of the
@@ -665,12 +665,6 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
     out
 }
 
-/// The largest distance of a node of a boundary element of a moving (or
-/// curved slip) part to its shape.
-pub fn node_distance<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>]) -> f64 {
-    per_part(mesh, parts, |b, target| b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max)).into_iter().fold(0.0, f64::max)
-}
-
 /// Per curved group, the boundary error: the largest distance of its nodes
 /// and of its sampled boundary to its shape.
 pub fn boundary_errors<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<std::collections::BTreeMap<String, BoundaryError>, HighOrderError> {
@@ -696,7 +690,7 @@ pub struct BoundaryError {
 /// Per part, the largest of `f(boundary element, shape)` over the boundary
 /// elements of moving (and curved slip) parts; 0 for other parts.
 fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: impl Fn(&CurvedBoundary, &std::sync::Arc<dyn crate::deform::BoundaryShape<D>>) -> f64 + Sync) -> Vec<f64> {
-    let worst = mesh
+    mesh
         .boundary
         .par_iter()
         .filter_map(|b| match &parts.get(b.part)?.kind {
@@ -707,8 +701,7 @@ fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: 
             w[k] = f64::max(w[k], d);
             w
         })
-        .reduce(|| vec![0.0; parts.len()], |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect());
-    worst
+        .reduce(|| vec![0.0; parts.len()], |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect())
 }
 
 /// Per part, the largest distance of the boundary sampled on a grid of
