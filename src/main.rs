@@ -166,8 +166,12 @@ fn run(cli: Cli) -> Result<()> {
                 "boundary distance: nodes {:.3e}  sampled {:.3e}",
                 r.quality.boundary_node_distance, r.quality.boundary_sample_distance
             );
-            println!("{}", settling_line(&r.quality.settling));
-            let runs = if r.algorithm2_runs > 1 { format!(", run {} times with shorter steps", r.algorithm2_runs) } else { String::new() };
+            if let Some(s) = r.quality.boundary_data.sliding_left {
+                let left = if s.t < 1.0 { format!("inverted {} element(s) of curved facets by t = {:.3}", s.elements, s.t) } else { format!("left {} element(s) not certified valid", s.elements) };
+                println!("algorithm 2: sliding {left}; this mesh is from a run with Dirichlet data (straight paths)");
+            }
+            println!("{}", settling_line(&r.quality.settling, r.quality.boundary_data.dirichlet));
+            let runs = if r.algorithm2_runs > 1 { format!(", run {} times", r.algorithm2_runs) } else { String::new() };
             println!("time: algorithm 2 {:.3}s ({} steps, {} halved{runs})  certification {:.3}s  total {:.3}s", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
             println!("wrote {}", r.outputs.join(", "));
             Ok(())
@@ -369,9 +373,9 @@ fn to_tags(cells: &[usize], tags: &[u64]) -> Vec<usize> {
 }
 
 /// One line on the settling pass of `curve`.
-fn settling_line(s: &deformesh::highorder::curve::Settling) -> String {
+fn settling_line(s: &deformesh::highorder::curve::Settling, dirichlet: bool) -> String {
     match (&s.kept_sliding, s.how) {
-        (Some(why), _) => format!("settling: nodes left where sliding put them ({why})"),
+        (Some(why), _) => format!("settling: nodes left where {} put them ({why})", if dirichlet { "the Dirichlet data" } else { "sliding" }),
         (None, how) => {
             let demoted = if s.demoted_elements.is_empty() {
                 String::new()

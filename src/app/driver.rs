@@ -540,9 +540,10 @@ pub struct CurveReport {
     pub steps: usize,
     /// Halved steps.
     pub halved_steps: usize,
-    /// Runs of Algorithm 2: more than 1 when its first run, with the
-    /// fewest steps, left an element not certified valid (see
-    /// [`crate::highorder::curve::AUTO_STEPS`]).
+    /// Runs of Algorithm 2: more than 1 when its first run, sliding with
+    /// the fewest steps, left an element not certified valid: then with
+    /// Dirichlet data, then shorter steps (see
+    /// [`crate::highorder::curve::AUTO_STEPS`] and `quality.boundary_data`).
     pub algorithm2_runs: usize,
     /// Algorithm 2's linear solves.
     pub solver: SolverReport,

@@ -309,7 +309,8 @@ pub struct SolverReport {
 pub enum SolverChoice {
     /// CG on an earlier step's Cholesky factor ([`SolverChoice::CholeskyCg`])
     /// up to [`AUTO_AMG_UNKNOWNS`] unknowns (in its dimension),
-    /// multigrid-preconditioned CG above.
+    /// multigrid-preconditioned CG above, turning to the factor if the
+    /// multigrid does not converge ([`AUTO_FACTOR_LIMIT`]).
     #[default]
     Auto,
     /// Sparse Cholesky (faer): exact, but its fill grows fast in 3D.
@@ -338,11 +339,23 @@ pub enum SolverChoice {
 /// boundary layer at p = 3, one factorisation in ten steps).
 pub const AUTO_AMG_UNKNOWNS: [usize; 2] = [200_000, 20_000];
 
+/// Up to these many unknowns `auto`'s multigrid CG turns to CG on a
+/// Cholesky factor when it does not converge
+/// ([`crate::solve::MultigridOrFactor`]); above, the failure is reported.
+pub const AUTO_FACTOR_LIMIT: usize = 400_000;
+
+/// A multigrid solve of more iterations than this makes `auto` turn to
+/// the factor ([`crate::solve::MultigridOrFactor`]) from the next step
+/// on, and one not converged in twice as many from this solve on: 7–14
+/// is usual, 130 to over 1,000 on a 1e-5 hex layer at p = 3.
+pub const AUTO_SLOW_MULTIGRID: usize = 100;
+
 impl SolverChoice {
     /// The solver this choice makes for a `dim`-D system of `unknowns`.
     pub fn make(self, dim: usize, unknowns: usize, tolerance: f64) -> Box<dyn SpdSolver> {
         let choice = match self {
-            SolverChoice::Auto if unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)] => SolverChoice::Amg,
+            // large: multigrid, kept as `Auto` for its fallback below
+            SolverChoice::Auto if unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)] => SolverChoice::Auto,
             SolverChoice::Auto => SolverChoice::CholeskyCg,
             chosen => chosen,
         };
@@ -358,12 +371,13 @@ impl SolverChoice {
                 cg.tolerance = tolerance;
                 Box::new(cg)
             }
-            SolverChoice::Amg | SolverChoice::Auto => {
+            SolverChoice::Amg => {
                 let mut cg = ConjugateGradient::new(Amg::default());
                 cg.max_iterations = 1000;
                 cg.tolerance = tolerance;
                 Box::new(cg)
             }
+            SolverChoice::Auto => Box::new(crate::solve::MultigridOrFactor::new(2 * AUTO_SLOW_MULTIGRID, tolerance, AUTO_SLOW_MULTIGRID, AUTO_FACTOR_LIMIT)),
         }
     }
 }
@@ -555,6 +569,13 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.solver.name()
     }
 
+    /// Whether `auto`'s multigrid turned to a Cholesky factor
+    /// ([`crate::solve::MultigridOrFactor`]): a later run on this mesh
+    /// should start with the factor.
+    pub fn solver_fell_back(&self) -> bool {
+        self.solver.info().fell_back
+    }
+
     /// What the solves have cost so far.
     pub fn solver_report(&self) -> SolverReport {
         let s = &self.stats;
@@ -608,6 +629,26 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             on_stop(self);
         }
         Ok(())
+    }
+
+    /// [`Deformation::run`] to t = 1 without stops, asking `go_on` after
+    /// every accepted step whether to continue: Ok(false) if it said no
+    /// before t = 1 (the state is then that step's).
+    pub fn run_while(&mut self, mut go_on: impl FnMut(&Self) -> bool) -> Result<bool, DeformError> {
+        let dt = 1.0 / self.options.steps.max(1) as f64;
+        while self.t < 1.0 - 1e-12 {
+            let mut h = dt.min(1.0 - self.t);
+            if self.options.max_strain.is_some() {
+                h = h.min(self.next_step);
+            }
+            self.step(h)?;
+            if self.t < 1.0 - 1e-12 && !go_on(self) {
+                return Ok(false);
+            }
+        }
+        self.t = 1.0;
+        go_on(self);
+        Ok(true)
     }
 
     /// One step of size at most `h`: cut by the step control

@@ -11,7 +11,7 @@
 use super::{check_order, nodes_1d, Basis1d, HighOrderError, Spacing};
 use crate::quality::certify::{Certificate, Certifier, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
-use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats};
+use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
@@ -74,6 +74,8 @@ pub const CURVE_STEP_CHANGE: f64 = 0.25;
 /// of Algorithm 2 (as step counts: 1/1, 1/2, 1/4, 1/8): the next run
 /// only if the last left an element not certified valid. Eight steps are
 /// the most, near the 10 that were the default before the step control.
+/// Each step size is run with sliding, then, if that left an element
+/// invalid, with the paper's Dirichlet data ([`BoundaryData`]).
 pub const AUTO_STEPS: [usize; 4] = [1, 2, 4, 8];
 
 impl Default for CurveOptions {
@@ -249,6 +251,64 @@ pub struct CurvedQuality {
     /// The settling pass that puts the sliding nodes at their intended
     /// places.
     pub settling: Settling,
+    /// The boundary data of the run of Algorithm 2 whose mesh this is.
+    pub boundary_data: BoundaryData,
+}
+
+/// Which boundary data carried the new boundary nodes in the run of
+/// Algorithm 2 that was kept ([`AUTO_STEPS`]).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BoundaryData {
+    /// The paper's Dirichlet data (straight paths to the images of the
+    /// flat places) rather than sliding.
+    pub dirichlet: bool,
+    /// If Dirichlet data were the fallback: what the sliding run with the
+    /// same steps left.
+    pub sliding_left: Option<SlidingLeft>,
+}
+
+/// What a sliding run left when Dirichlet data took over.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SlidingLeft {
+    /// Elements certified inverted (stopped early: those of curved
+    /// facets) or not certified valid (at t = 1).
+    pub elements: usize,
+    /// Where the run stopped: at the first element of a curved facet
+    /// certified inverted, or 1.
+    pub t: f64,
+}
+
+/// The elements with a node on a curved facet, watched during a sliding
+/// run of Algorithm 2.
+struct Watch {
+    certifier: Certifier,
+    elements: Vec<Vec<usize>>,
+}
+
+impl Watch {
+    fn new<M: crate::deform::Q1Mesh<D, N>, const D: usize, const N: usize>(sub: &Subdivision<M, D>, parts: &[BoundaryPart<D>], spacing: Spacing) -> Result<Self, HighOrderError> {
+        let mut on = vec![false; sub.fine.nodes().len()];
+        for (nodes, part) in &sub.facets {
+            if matches!(parts[*part].kind, PartKind::Move { .. }) {
+                nodes.iter().for_each(|&n| on[n] = true);
+            }
+        }
+        let elements = sub.elements.iter().filter(|e| e.iter().any(|&n| on[n])).cloned().collect();
+        Ok(Watch { certifier: Certifier::new(sub.p, spacing)?, elements })
+    }
+
+    /// How many watched elements are certified inverted (det J ≤ 0 at a
+    /// point): a cheap search, as validity here needs no tight bound.
+    fn inverted<const D: usize>(&self, nodes: &[[f64; D]]) -> usize {
+        let quick = CertifyOptions { rel_tol: 0.5, max_splits: 64, samples: 2 };
+        self.elements
+            .par_iter()
+            .filter(|e| {
+                let ctrl: Vec<[f64; D]> = e.iter().map(|&n| nodes[n]).collect();
+                self.certifier.certify(&ctrl, &quick).min_det_upper <= 0.0
+            })
+            .count()
+    }
 }
 
 /// What the settling pass did ([`CurveOptions::settle`]).
@@ -268,6 +328,9 @@ pub struct Settling {
     /// valid: they went to the images of their flat places or, failing
     /// that too, stayed where sliding put them.
     pub demoted_elements: Vec<usize>,
+    /// Elements with a node the settling left where Algorithm 2 put it,
+    /// as both other places left an element invalid (0-based).
+    pub kept_elements: Vec<usize>,
     /// Why the nodes were left where sliding put them, if they were (the
     /// pass was off, tangled, or left elements not certified valid).
     pub kept_sliding: Option<String>,
@@ -337,6 +400,7 @@ fn summary<const D: usize>(mesh: &CurvedMesh<D>, certs: &[Certificate]) -> Curve
         first_layer_change: Default::default(),
         boundary_error: Default::default(),
         settling: Settling::default(),
+        boundary_data: BoundaryData::default(),
     }
 }
 
@@ -375,47 +439,66 @@ where
     let p = opts.order;
     let clock = Instant::now();
     let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?)?;
+    let dirichlet_parts = with_dirichlet_data(&parts2);
     if opts.dirichlet {
-        for part in parts2.iter_mut() {
-            if let PartKind::Move { mode, .. } = &mut part.kind {
-                *mode = crate::deform::MoveMode::Dirichlet;
-            }
-        }
+        parts2 = dirichlet_parts.clone();
     }
     // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
     // a few thousand nodes, as for Algorithm 1
-    let schedule: Vec<DeformOptions> = match opts.steps {
+    let steps: Vec<DeformOptions> = match opts.steps {
         Some(n) => vec![DeformOptions { steps: n.max(1), max_strain: None, ..opts.flow.clone() }],
         None => AUTO_STEPS.iter().map(|&n| DeformOptions { steps: n, max_strain: Some(opts.step_change), ..opts.flow.clone() }).collect(),
     };
-    let mut attempts = 0;
+    // per step size, sliding first, then the paper's Dirichlet data: a
+    // sliding node glides along the curving wall by a straight Euler step
+    // and is put back onto it, the cells above it are not, so a first
+    // layer thinner than that first-order error is pulled apart (measured
+    // on the extruded 1e-5 layer at p = 3: its inner nodes end 1.1e-4,
+    // 2.8e-5, 6.9e-6 off the Dirichlet result after 2, 8, 32 steps),
+    // while a Dirichlet node's straight path is exact under Euler
+    let schedule: Vec<(DeformOptions, bool)> = steps.iter().flat_map(|f| [(f.clone(), false), (f.clone(), true)]).filter(|&(_, d)| d || !opts.dirichlet).collect();
     let mut certify_s = 0.0;
+    let mut sliding_left = None;
+    let watch = Watch::new(&sub, &parts2, opts.spacing)?;
+    let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor: false, certify_s: 0.0 };
+    let mut attempts = 0;
     let slid = loop {
-        let flow = schedule[attempts].clone();
+        let (flow, dirichlet) = schedule[attempts].clone();
         attempts += 1;
-        let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(sub.refine_mesh(), parts2.clone(), JacobianField::uniform(), flow)?;
-        def.run(&[], |_| {}, |d| progress(d.t, &d.stats))?;
-        let mesh = CurvedMesh {
-            p,
-            spacing: opts.spacing,
-            nodes: def.mesh.mesh.nodes().to_vec(),
-            cells: sub.elements.clone(),
-            boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
-            part_names: coarse.names().to_vec(),
+        // a sliding run with a Dirichlet run after it stops at the first
+        // element of a curved facet certified inverted: the drift that
+        // inverts it only grows. It showed at t = 0.87–0.96 on the layers
+        // measured, so this saves the last steps and a full certification
+        let watched = (!dirichlet && attempts < schedule.len()).then_some(&watch);
+        let parts = if dirichlet { &dirichlet_parts } else { &parts2 };
+        let mut pass = match runner.run(parts, &flow, watched, &mut progress)? {
+            Ok(pass) => pass,
+            Err(left) => {
+                tracing::info!("sliding inverted {} elements by t = {:.3}: again with Dirichlet data", left.elements, left.t);
+                sliding_left = Some(left);
+                continue;
+            }
         };
-        let t0 = Instant::now();
-        let (certificates, quality) = certify_mesh(&mesh)?;
-        certify_s += t0.elapsed().as_secs_f64();
         // the Q1 cells stay valid with few steps, but the error of a long
         // Euler step can still bend an element of a thin layer invalid
         // (measured: a 1e-5 layer at p = 3 in one step): then again with
         // shorter steps
-        if quality.invalid_elements.is_empty() || attempts == schedule.len() {
-            let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
-            // the solver is dropped here, before settling builds its own
-            break Pass { mesh, certificates, quality, stats: def.stats.clone(), solver: def.solver_report(), moved_distance };
+        if pass.quality.invalid_elements.is_empty() || attempts == schedule.len() {
+            pass.quality.boundary_data = BoundaryData { dirichlet, sliding_left: if dirichlet && !opts.dirichlet { sliding_left } else { None } };
+            break pass;
+        }
+        if !dirichlet {
+            sliding_left = Some(SlidingLeft { elements: pass.quality.invalid_elements.len(), t: 1.0 });
+            tracing::info!("sliding left {} elements not certified valid: again with Dirichlet data", pass.quality.invalid_elements.len());
         }
     };
+    // once `auto`'s multigrid has turned to the factor on this mesh, the
+    // settling starts with the factor
+    let mut opts = opts.clone();
+    if runner.factor {
+        opts.flow.solver = SolverChoice::CholeskyCg;
+    }
+    let opts = &opts;
     let why_not = if opts.dirichlet {
         Some("Dirichlet data: the nodes are at their places")
     } else if !opts.settle {
@@ -423,14 +506,16 @@ where
     } else {
         None
     };
-    let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = match why_not {
+    let pass = match why_not {
         Some(why) => {
             let mut pass = slid;
             pass.quality.settling.kept_sliding = Some(why.into());
             pass
         }
-        None => settle(&sub, &parts2, opts, slid, &mut certify_s),
+        None => settle(&sub, &parts2, opts, slid, &mut runner.certify_s),
     };
+    let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = pass;
+    certify_s += runner.certify_s;
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
@@ -448,6 +533,76 @@ where
     quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
     Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
+}
+
+/// What every run of Algorithm 2 in one `curve` shares.
+struct Runner<'a, M, const D: usize> {
+    sub: &'a Subdivision<M, D>,
+    names: &'a [String],
+    spacing: Spacing,
+    /// `auto`'s multigrid has turned to the factor on this mesh: the
+    /// later runs start with the factor.
+    factor: bool,
+    /// Seconds spent certifying.
+    certify_s: f64,
+}
+
+impl<M, const D: usize> Runner<'_, M, D> {
+    /// One run of Algorithm 2 from the subdivided mesh, certified; with a
+    /// watch, stopped (Err) at the first watched element certified inverted.
+    fn run<const N: usize>(
+        &mut self,
+        parts: &[BoundaryPart<D>],
+        flow: &DeformOptions,
+        watch: Option<&Watch>,
+        progress: &mut impl FnMut(f64, &RunStats),
+    ) -> Result<Result<Pass<D>, SlidingLeft>, CurveError>
+    where
+        M: Subdividable<D, N>,
+        RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+    {
+        let mut flow = flow.clone();
+        if self.factor {
+            flow.solver = SolverChoice::CholeskyCg;
+        }
+        let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(self.sub.refine_mesh(), parts.to_vec(), JacobianField::uniform(), flow)?;
+        let mut inverted = 0;
+        def.run_while(|d| {
+            progress(d.t, &d.stats);
+            inverted = watch.map_or(0, |w| w.inverted(d.mesh.mesh.nodes()));
+            inverted == 0
+        })?;
+        self.factor |= def.solver_fell_back();
+        if inverted > 0 {
+            return Ok(Err(SlidingLeft { elements: inverted, t: def.t }));
+        }
+        let mesh = CurvedMesh {
+            p: self.sub.p,
+            spacing: self.spacing,
+            nodes: def.mesh.mesh.nodes().to_vec(),
+            cells: self.sub.elements.clone(),
+            boundary: self.sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
+            part_names: self.names.to_vec(),
+        };
+        let t0 = Instant::now();
+        let (certificates, quality) = certify_mesh(&mesh)?;
+        self.certify_s += t0.elapsed().as_secs_f64();
+        let moved_distance = def.boundary_distances().iter().map(|d| d.1).fold(0.0, f64::max);
+        // the solver is dropped here, before settling builds its own
+        Ok(Ok(Pass { mesh, certificates, quality, stats: def.stats.clone(), solver: def.solver_report(), moved_distance }))
+    }
+}
+
+/// The parts with every moving part's new nodes on straight paths to
+/// their images (the paper's data) instead of sliding.
+fn with_dirichlet_data<const D: usize>(parts: &[BoundaryPart<D>]) -> Vec<BoundaryPart<D>> {
+    let mut parts = parts.to_vec();
+    for part in parts.iter_mut() {
+        if let PartKind::Move { mode, .. } = &mut part.kind {
+            *mode = crate::deform::MoveMode::Dirichlet;
+        }
+    }
+    parts
 }
 
 /// A curved mesh as a pass of Algorithm 2 left it, certified.
@@ -471,7 +626,10 @@ where
 {
     let t0 = Instant::now();
     match settled(sub, parts, opts, &slid, certify_s) {
-        Ok(pass) if newly_invalid(&pass, &slid).is_empty() => pass,
+        Ok(mut pass) if newly_invalid(&pass, &slid).is_empty() => {
+            pass.quality.boundary_data = slid.quality.boundary_data.clone();
+            pass
+        }
         other => {
             let why = match other {
                 Ok(p) => {
@@ -512,6 +670,7 @@ where
         }
         if bad.is_empty() || !changed {
             pass.quality.settling.demoted_elements = demoted.into_iter().collect();
+            pass.quality.settling.kept_elements = (0..slid.mesh.cells.len()).filter(|&c| slid.mesh.cells[c].iter().any(|&n| plan[n] == Settle::Keep)).collect();
             return Ok(pass);
         }
     }

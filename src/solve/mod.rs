@@ -24,6 +24,7 @@ pub use cg::{ConjugateGradient, Jacobi, Preconditioner, DEFAULT_TOLERANCE};
 pub use cholesky::{CholeskySolver, LaggedCholesky};
 pub use csr::{axpy, dot, Csr};
 
+
 use std::time::Duration;
 
 /// Errors of the sparse solvers.
@@ -68,6 +69,8 @@ pub struct SolveInfo {
     pub rebuilt: bool,
     /// Time of the last `factor` spent building a hierarchy.
     pub setup: Duration,
+    /// A solver that can turn to another ([`MultigridOrFactor`]) has.
+    pub fell_back: bool,
 }
 
 /// A sparse SPD solver: analyse a pattern once, factor and solve many times.
@@ -83,6 +86,100 @@ pub trait SpdSolver: Send {
     /// Iterations and set-up of the last factor/solve.
     fn info(&self) -> SolveInfo {
         SolveInfo::default()
+    }
+}
+
+/// Multigrid-preconditioned CG that turns to CG on a lagged Cholesky
+/// factor for the rest of the run when the multigrid struggles: a solve
+/// that does not converge, or needs more than `slow` iterations (the
+/// factor is then built before the next step). What `auto` chooses for
+/// large systems. Why: the multigrid takes 7–14 iterations on the
+/// benchmark meshes, but on cells of aspect ratio 10⁴–10⁵ (a 1e-5
+/// boundary layer of hexes at p = 3) it needed 130 to over 1,000 a solve,
+/// while a factor stays exact. The factor is only tried up to
+/// `factor_limit` unknowns, as its fill grows fast in 3D (about 4 GB at
+/// 300k unknowns on such a layer).
+pub struct MultigridOrFactor {
+    multigrid: ConjugateGradient<Amg>,
+    factor: Option<ConjugateGradient<LaggedCholesky>>,
+    tolerance: f64,
+    slow: usize,
+    factor_limit: usize,
+    switch: bool,
+}
+
+impl MultigridOrFactor {
+    /// Multigrid CG with at most `max_iterations` a solve, relative
+    /// residual `tolerance`; the factor after a solve of more than `slow`
+    /// iterations or none converged, up to `factor_limit` unknowns.
+    pub fn new(max_iterations: usize, tolerance: f64, slow: usize, factor_limit: usize) -> Self {
+        let mut multigrid = ConjugateGradient::new(Amg::default());
+        multigrid.max_iterations = max_iterations;
+        multigrid.tolerance = tolerance;
+        MultigridOrFactor { multigrid, factor: None, tolerance, slow, factor_limit, switch: false }
+    }
+
+    /// Builds and factors the fallback on `a`.
+    fn to_factor(&mut self, a: &Csr) -> Result<(), SolveError> {
+        let mut f = ConjugateGradient::new(LaggedCholesky::default());
+        f.tolerance = self.tolerance;
+        f.analyze(a)?;
+        // the factor reads no node structure
+        f.factor(a, Structure { node_ptr: &[], near_null: &[], count: 0 })?;
+        self.factor = Some(f);
+        Ok(())
+    }
+}
+
+impl SpdSolver for MultigridOrFactor {
+    fn analyze(&mut self, a: &Csr) -> Result<(), SolveError> {
+        match &mut self.factor {
+            Some(f) => f.analyze(a),
+            None => self.multigrid.analyze(a),
+        }
+    }
+
+    fn factor(&mut self, a: &Csr, structure: Structure<'_>) -> Result<(), SolveError> {
+        match &mut self.factor {
+            Some(f) => f.factor(a, structure),
+            None if self.switch => self.to_factor(a),
+            None => self.multigrid.factor(a, structure),
+        }
+    }
+
+    fn solve_in_place(&mut self, a: &Csr, rhs: &mut [f64]) -> Result<(), SolveError> {
+        if let Some(f) = &mut self.factor {
+            return f.solve_in_place(a, rhs);
+        }
+        let fits = a.nrows <= self.factor_limit;
+        let b = rhs.to_vec();
+        match self.multigrid.solve_in_place(a, rhs) {
+            Err(SolveError::NoConvergence(n)) if fits => {
+                tracing::info!("multigrid CG did not converge in {n} iterations: CG on a Cholesky factor from now on");
+                self.to_factor(a)?;
+                rhs.copy_from_slice(&b);
+                self.factor.as_mut().expect("just built").solve_in_place(a, rhs)
+            }
+            Ok(()) => {
+                self.switch = fits && self.multigrid.info().iterations > self.slow;
+                Ok(())
+            }
+            other => other,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        match self.factor {
+            Some(_) => "conjugate gradients (multigrid, then the Cholesky factor of an earlier step, as multigrid was slow)",
+            None => self.multigrid.name(),
+        }
+    }
+
+    fn info(&self) -> SolveInfo {
+        match &self.factor {
+            Some(f) => SolveInfo { fell_back: true, ..f.info() },
+            None => self.multigrid.info(),
+        }
     }
 }
 

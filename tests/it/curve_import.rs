@@ -61,10 +61,13 @@ fn curve_takes_one_step_where_the_motion_is_gentle_and_more_on_a_thin_layer() {
     let r = curve_file(&j, |_| {}).unwrap();
     assert_eq!((r.steps, r.halved_steps, r.algorithm2_runs), (1, 0, 1));
     assert!(r.quality.invalid_elements.is_empty());
-    // the 1e-3 layer at p = 4: one step, unchecked, leaves elements invalid
+    // the 1e-3 layer at p = 4: one step, unchecked, leaves elements
+    // invalid when sliding; the paper's Dirichlet data, tried next, do not
     let mut j = job(dir.path(), "cylinder_bl_coarse.msh", CYLINDER, 4, 1);
-    let e = curve_file(&j, |_| {}).unwrap_err().to_string();
-    assert!(e.contains("not certified valid"), "{e}");
+    let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let left = r.quality.boundary_data.sliding_left.expect("sliding left elements invalid");
+    assert!(left.elements > 0 && left.t == 1.0 && r.quality.boundary_data.dirichlet && r.quality.invalid_elements.is_empty(), "{:?}", r.quality.boundary_data);
+    assert_eq!((r.steps, r.algorithm2_runs), (1, 2));
     // the step control cuts the steps where the layer is squeezed
     j.options.steps = None;
     let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("{e}"));
@@ -421,43 +424,120 @@ fn cylinder_bl(out: &Path, first: f64, wall_size: f64, options: &[String]) -> Ve
 }
 
 #[test]
-fn extruded_thin_boundary_layer_with_slip_end_planes_stays_valid() {
-    // a first layer of 1e-5 on the cylinder wall, the end planes slip: the
-    // new nodes on the coarse edges inside the end planes must slide in the
-    // plane (held on their straight edges, they could not follow the wall's
-    // nodes 1e-5 away and the first layer tangled at t ≈ 1e-3)
+fn extruded_thin_boundary_layers_with_slip_end_planes_stay_valid_at_p2_and_p3() {
+    // first layers of 1e-5 and 1e-3 on the cylinder wall, the end planes
+    // slip: the new nodes on the coarse edges inside the end planes must
+    // slide in the plane (held on their straight edges, they could not
+    // follow the wall's nodes 1e-5 away and the first layer tangled at
+    // t ≈ 1e-3). At p = 3 on the 1e-5 layer sliding itself leaves the
+    // first layer invalid (a first-order Euler drift of the cells above
+    // the put-back wall nodes: 2.8e-5 after 8 steps against a 1e-5
+    // layer), and the run with the paper's Dirichlet data is kept
     let dir = tempfile::tempdir().unwrap();
-    let input = extruded_bl(dir.path(), 1e-5, 0.3, 0.8);
-    let linear = deformesh::io::msh::read_hex_msh(&input).unwrap();
-    let cells = linear.cells.len();
-    let p = 2;
-    let mut j = job(dir.path(), "unused", CYLINDER_3D, p, 10);
-    j.input = input;
-    let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("extruded layer at p = {p}: {e}"));
-    assert_eq!(r.cells, cells);
-    assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
-    assert_eq!(r.unbound_groups, vec!["farfield".to_string()]);
-    let file = dir.path().join(format!("curved{p}.msh"));
-    let mesh = CurvedMesh::<3>::read_msh(&file).unwrap();
-    let group = |name: &str| mesh.part_names.iter().position(|n| n == name).unwrap();
-    let nodes_of = |part: usize| mesh.boundary.iter().filter(move |b| b.part == part).flat_map(|b| b.nodes.iter().copied());
-    let wall_off = nodes_of(group("wall")).map(|n| (mesh.nodes[n][0].hypot(mesh.nodes[n][1]) - 0.5).abs()).fold(0.0, f64::max);
-    let bottom_off = nodes_of(group("bottom")).map(|n| mesh.nodes[n][2].abs()).fold(0.0, f64::max);
-    let top_off = nodes_of(group("top")).map(|n| (mesh.nodes[n][2] - 1.0).abs()).fold(0.0, f64::max);
-    assert!(wall_off < 1e-10, "a wall node {wall_off:e} off the cylinder");
-    assert!(bottom_off < 1e-12 && top_off < 1e-12, "end-plane nodes off their planes by {bottom_off:e}, {top_off:e}");
-    // old nodes stay, so the first layer keeps its height at the coarse
-    // vertices; the report also gives the largest change over all wall
-    // nodes (measured 19%: the new wall nodes slide along the wall)
-    let layer = r.quality.first_layer_change["wall"];
-    assert!(layer.vertices < 0.01, "the first layer's height changes by {:.2}% at a vertex", 100.0 * layer.vertices);
-    // Gmsh's bound is looser on these thin curved hexes (1.5e-3 measured)
-    let a = common::gmsh_agrees_within::<3>(&file, 12, cells, 3e-3);
-    assert_eq!(a.sj_not_positive, 0, "{a:?}");
-    eprintln!(
-        "extruded 1e-5 layer, {cells} hexes, p = {p}: min det J {:.3e}, scaled Jacobian min {:.4}, wall within {wall_off:.1e}, planes within {:.1e}, first layer changes by {:.1e} at the vertices, {:.1}% over all wall nodes, {} steps ({} halved), {:.1}s; Gmsh {a:?}",
-        r.quality.min_det_j, r.quality.scaled_jacobian.min, bottom_off.max(top_off), layer.vertices, 100.0 * layer.all_nodes, r.steps, r.halved_steps, r.total_s
-    );
+    for (first, p) in [(1e-5, 2), (1e-5, 3), (1e-3, 2), (1e-3, 3)] {
+        let input = extruded_bl(dir.path(), first, 0.3, 0.8);
+        let linear = deformesh::io::msh::read_hex_msh(&input).unwrap();
+        let cells = linear.cells.len();
+        let mut j = job(dir.path(), "unused", CYLINDER_3D, p, 1);
+        j.options.steps = None;
+        j.input = input;
+        j.output = dir.path().join(format!("curved_{first:e}_{p}.msh"));
+        let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("extruded {first:e} layer at p = {p}: {e}"));
+        assert_eq!(r.cells, cells);
+        assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        assert_eq!(r.unbound_groups, vec!["farfield".to_string()]);
+        let data = &r.quality.boundary_data;
+        // the fallback is said, with what sliding left (the whole first
+        // layer: 16 cells around × 2 extruded layers)
+        assert_eq!(data.sliding_left.is_some(), data.dirichlet, "{data:?}");
+        assert_eq!(data.sliding_left.map(|s| s.elements), if (first, p) == (1e-5, 3) { Some(32) } else { None }, "{first:e}, p = {p}");
+        let file = j.output.clone();
+        let mesh = CurvedMesh::<3>::read_msh(&file).unwrap();
+        let group = |name: &str| mesh.part_names.iter().position(|n| n == name).unwrap();
+        let nodes_of = |part: usize| mesh.boundary.iter().filter(move |b| b.part == part).flat_map(|b| b.nodes.iter().copied());
+        let wall_off = nodes_of(group("wall")).map(|n| (mesh.nodes[n][0].hypot(mesh.nodes[n][1]) - 0.5).abs()).fold(0.0, f64::max);
+        let bottom_off = nodes_of(group("bottom")).map(|n| mesh.nodes[n][2].abs()).fold(0.0, f64::max);
+        let top_off = nodes_of(group("top")).map(|n| (mesh.nodes[n][2] - 1.0).abs()).fold(0.0, f64::max);
+        assert!(wall_off < 1e-10, "a wall node {wall_off:e} off the cylinder");
+        assert!(bottom_off < 1e-12 && top_off < 1e-12, "end-plane nodes off their planes by {bottom_off:e}, {top_off:e}");
+        // settled along the arcs: the sampled wall error is the order's
+        // (measured 2.27e-5 at p = 2, 6.06e-6 at p = 3 on both layers; the
+        // images of the flat places, unsettled, gave 5.6e-5 at p = 3)
+        let settled = [2.4e-5, 6.5e-6][p - 2];
+        assert!(r.quality.settling.applied && r.quality.boundary_error["wall"].samples < settled, "{:?}", r.quality.boundary_error);
+        // old nodes stay, so the first layer keeps its height at the coarse
+        // vertices; the report also gives the largest change over all wall
+        // nodes (the new wall nodes move along the wall)
+        let layer = r.quality.first_layer_change["wall"];
+        assert!(layer.vertices < 0.01, "the first layer's height changes by {:.2}% at a vertex", 100.0 * layer.vertices);
+        // Gmsh's bound is looser on these thin curved hexes (1.5e-3 measured)
+        let a = common::gmsh_agrees_within::<3>(&file, [12, 92][p - 2], cells, 3e-3);
+        assert_eq!(a.sj_not_positive, 0, "{a:?}");
+        eprintln!(
+            "extruded {first:e} layer, {cells} hexes, p = {p}: min det J {:.3e}, scaled Jacobian min {:.4}, wall within {wall_off:.1e} (sampled {:.2e}), planes within {:.1e}, first layer changes by {:.1e} at the vertices, {:.1}% over all wall nodes, {} steps ({} halved), {} runs, {data:?}, {:.1}s; Gmsh {a:?}",
+            r.quality.min_det_j, r.quality.scaled_jacobian.min, r.quality.boundary_error["wall"].samples, bottom_off.max(top_off), layer.vertices, 100.0 * layer.all_nodes, r.steps, r.halved_steps, r.algorithm2_runs, r.total_s
+        );
+    }
+}
+
+/// The sphere |x| = 0.5 in the box [-1, 1]^3 with a hex boundary layer
+/// (tests/python/sphere_bl.py: an O-grid of 6 patches of `n` × `n` cells,
+/// the thinnest first cell `first`), written by Gmsh into `dir`; with
+/// `order`, also the figures of Gmsh's own `setOrder(order)` on the same
+/// mesh and CAD.
+fn sphere_bl(dir: &Path, first: f64, n: usize, order: Option<usize>) -> (PathBuf, serde_json::Value) {
+    let out = dir.join("sphere_bl.msh");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/sphere_bl.py");
+    let mut cmd = std::process::Command::new(common::python());
+    cmd.arg(script).args([first.to_string(), n.to_string()]).arg(&out);
+    if let Some(p) = order {
+        cmd.args(["--order".to_string(), p.to_string(), "--method".into(), "setorder".into()]);
+    }
+    let run = cmd.output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let last = String::from_utf8_lossy(&run.stdout).lines().last().unwrap().to_string();
+    (out, serde_json::from_str(&last).unwrap())
+}
+
+#[test]
+fn a_hex_boundary_layer_around_a_sphere_stays_valid_at_p2_and_p3() {
+    // a first layer of 1e-4 around a sphere, the box fixed: every element
+    // certified valid, where Gmsh's own setOrder leaves the first layer's
+    // patch-corner cells inverted (24 of 672 at p = 2 and 3), and closer
+    // to the sphere than Gmsh's nodes, which crowd along the patch edges
+    // (measured: ours 7.1e-4 / 1.9e-4 against Gmsh's 2.5e-3 / 1.0e-3)
+    let dir = tempfile::tempdir().unwrap();
+    let geometry = "[[group]]\nname = \"sphere\"\nkind = \"curve\"\nshape = { type = \"sphere\", centre = [0.0, 0.0, 0.0], radius = 0.5 }\n";
+    for p in [2, 3] {
+        let (input, gmsh) = sphere_bl(dir.path(), 1e-4, 2, Some(p));
+        let cells = deformesh::io::msh::read_hex_msh(&input).unwrap().cells.len();
+        let mut j = job(dir.path(), "unused", geometry, p, 1);
+        j.options.steps = None;
+        j.input = input;
+        let r = curve_file(&j, |_| {}).unwrap_or_else(|e| panic!("sphere layer at p = {p}: {e}"));
+        assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        assert_eq!(r.unbound_groups, vec!["box".to_string()]);
+        let mesh = CurvedMesh::<3>::read_msh(&j.output).unwrap();
+        let sphere = mesh.part_names.iter().position(|n| n == "sphere").unwrap();
+        let off = mesh.boundary.iter().filter(|b| b.part == sphere).flat_map(|b| &b.nodes).map(|&n| (deformesh::numeric::norm(mesh.nodes[n]) - 0.5).abs()).fold(0.0, f64::max);
+        assert!(off < 1e-10, "a sphere node {off:e} off the sphere");
+        let layer = r.quality.first_layer_change["sphere"];
+        assert!(layer.vertices < 0.01, "the first layer's height changes by {:.2}% at a vertex", 100.0 * layer.vertices);
+        let ours = r.quality.boundary_error["sphere"].samples;
+        let theirs = gmsh["boundary_sample_distance"].as_f64().unwrap();
+        assert!(gmsh["invalid"].as_u64().unwrap() > 0 && ours < 0.35 * theirs, "ours {ours:e}, Gmsh's setOrder {gmsh}");
+        // Gmsh's minSJ, a lower bound, goes under 0 on 264 of the p = 2
+        // elements, whose scaled Jacobian Gmsh's own Jacobians put at 0.42
+        // and more (checked inside on every element); at p = 3 it is
+        // positive everywhere. Its minDetJac, also a looser lower bound,
+        // is 3.4e-3 under ours on the thinnest p = 2 elements
+        let a = common::gmsh_agrees_within::<3>(&j.output, [12, 92][p - 2], cells, 5e-3);
+        assert!(p == 2 || a.sj_not_positive == 0, "{a:?}");
+        eprintln!(
+            "sphere 1e-4 layer, {cells} hexes, p = {p}: min det J {:.3e}, scaled Jacobian min {:.4}, sphere nodes within {off:.1e}, sampled {ours:.2e} (Gmsh setOrder {theirs:.2e}, {} invalid), first layer {:.1e} at the vertices, {} runs, {:?}, {:.1}s; Gmsh {a:?}",
+            r.quality.min_det_j, r.quality.scaled_jacobian.min, gmsh["invalid"], layer.vertices, r.algorithm2_runs, r.quality.boundary_data, r.total_s
+        );
+    }
 }
 
 #[test]
