@@ -105,9 +105,12 @@ case, p, method, limit = sys.argv[1:]
 rows = []
 for line in sys.stdin:
     try:
-        rows.append(json.loads(line))
+        row = json.loads(line)
     except ValueError:
-        pass
+        continue
+    # a run stopped by the timeout leaves only the mesh line
+    if "method" in row:
+        rows.append(row)
 if not rows:
     print(f"| {case} | {p} | Gmsh {method} | did not finish in {limit} s | | | |")
 elif "error" in rows[0]:
