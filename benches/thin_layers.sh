@@ -12,8 +12,8 @@
 #   ORDERS         default "2 3"
 #   ELASTIC_TIMEOUT  seconds for one HighOrderElastic run (default 300; run once)
 #
-# Meshes: tests/python/gmsh_curve_3d.py (the extruded cylinder of
-# tests/python/cylinder_bl.py, wall size 0.3, --far 0.8, 1,472 / 670 hexes)
+# Meshes: tests/python/cylinder_bl.py --extrude (the extruded cylinder,
+# wall size 0.3, --far 0.8, 1,472 / 670 hexes)
 # and tests/python/sphere_bl.py (O-grid, 3 x 3 cells a patch, 1,566 hexes,
 # thinnest first cell 1e-4). Figures per row: invalid elements (ours:
 # certified; Gmsh: minDetJac <= 0), least scaled Jacobian (ours: sampled on
@@ -32,18 +32,6 @@ DIR=target/thin-layers-bench
 mkdir -p "$DIR/out"
 [[ -x $DEFORMESH ]] || cargo build --release
 
-cat > "$DIR/cylinder.toml" <<'EOF'
-[[group]]
-name = "wall"
-kind = "curve"
-shape = { type = "cylinder", point = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0], radius = 0.5 }
-[[group]]
-name = "top"
-kind = "slip"
-[[group]]
-name = "bottom"
-kind = "slip"
-EOF
 cat > "$DIR/sphere.toml" <<'EOF'
 [[group]]
 name = "sphere"
@@ -56,8 +44,8 @@ EOF
 gmsh_case() {
     local case=$1; shift
     case $case in
-        cyl1e-5) "$PYTHON" tests/python/gmsh_curve_3d.py 1e-5 0.3 "$DIR/$case.msh" --far 0.8 "$@" ;;
-        cyl1e-3) "$PYTHON" tests/python/gmsh_curve_3d.py 1e-3 0.3 "$DIR/$case.msh" --far 0.8 "$@" ;;
+        cyl1e-5) "$PYTHON" tests/python/cylinder_bl.py 1e-5 0.3 "$DIR/$case.msh" --far 0.8 --extrude "$@" ;;
+        cyl1e-3) "$PYTHON" tests/python/cylinder_bl.py 1e-3 0.3 "$DIR/$case.msh" --far 0.8 --extrude "$@" ;;
         sphere1e-4) "$PYTHON" tests/python/sphere_bl.py 1e-4 3 "$DIR/$case.msh" "$@" ;;
     esac
 }
@@ -70,7 +58,7 @@ median() { sort -g | awk '{ a[NR] = $1 } END { print (NR % 2) ? a[(NR + 1) / 2] 
 printf '| case | p | method | invalid | min scaled J | boundary error | seconds (median of %s) |\n|---|---|---|---|---|---|---|\n' "$REPEAT"
 for case in $CASES; do
     gmsh_case "$case" > /dev/null
-    geometry=$DIR/cylinder.toml; group=wall
+    geometry=tests/data/extruded_cylinder.geometry.toml; group=wall
     [[ $case == sphere* ]] && geometry=$DIR/sphere.toml && group=sphere
     for p in $ORDERS; do
         times=()

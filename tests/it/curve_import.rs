@@ -393,18 +393,7 @@ fn a_shape_that_does_not_match_the_mesh_is_refused() {
     assert!(e.contains("shape_tolerance must be a positive number"), "{e}");
 }
 
-const CYLINDER_3D: &str = r#"
-[[group]]
-name = "wall"
-kind = "curve"
-shape = { type = "cylinder", point = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0], radius = 0.5 }
-[[group]]
-name = "top"
-kind = "slip"
-[[group]]
-name = "bottom"
-kind = "slip"
-"#;
+const CYLINDER_3D: &str = include_str!("../data/extruded_cylinder.geometry.toml");
 
 /// The cylinder boundary-layer mesh extruded into hexes
 /// (tests/python/cylinder_bl.py: 1 along z in two layers; groups wall,

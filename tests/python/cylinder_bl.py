@@ -20,6 +20,7 @@ ap.add_argument("out")
 ap.add_argument("--far", type=float, default=0.3, help="mesh size at the square's corners")
 ap.add_argument("--extrude", action="store_true")
 ap.add_argument("--order", type=int)
+ap.add_argument("--method", choices=["setorder", "fastcurving", "elastic"], default="setorder")
 a = ap.parse_args()
 gmsh.initialize()
 gmsh.option.setNumber("General.Terminal", 0)
@@ -61,6 +62,10 @@ gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
 gmsh.option.setNumber("Mesh.RecombineAll", 1)
 gmsh.model.mesh.generate(3 if a.extrude else 2)
 gmsh.write(a.out)
+if a.order and a.extrude:
+    from gmsh_curving import curve_and_judge
+
+    curve_and_judge(a.order, a.method, lat[4:8], lambda pts: abs((pts[..., 0] ** 2 + pts[..., 1] ** 2) ** 0.5 - r))
 if a.order and not a.extrude:
     p = a.order
     gmsh.model.mesh.setOrder(p)

@@ -16,9 +16,10 @@ With --order P, also curves the same mesh on the same CAD with Gmsh: setOrder
 {"method", "error"} when Gmsh throws.
 
 Usage: python sphere_bl.py FIRST N OUT.msh [--growth G] [--order P --method {setorder,fastcurving,elastic}]"""
-import argparse, json, math, time
+import argparse, json, math
 import numpy as np
 import gmsh
+from gmsh_curving import curve_and_judge
 
 ap = argparse.ArgumentParser()
 ap.add_argument("first", type=float)
@@ -107,31 +108,5 @@ gmsh.write(a.out)
 hexes = sum(len(t) for t in gmsh.model.mesh.getElements(3)[1])
 print(json.dumps({"hexes": hexes, "first": first, "first_line": h}))
 if a.order:
-    p = a.order
-    try:
-        t0 = time.perf_counter()
-        gmsh.model.mesh.setOrder(p)
-        if a.method != "setorder":
-            gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if a.method == "fastcurving" else 3)
-            gmsh.model.mesh.optimize("HighOrderFastCurving" if a.method == "fastcurving" else "HighOrderElastic")
-        secs = time.perf_counter() - t0
-    except Exception as e:
-        print(json.dumps({"method": a.method, "error": str(e)}))
-        raise SystemExit(1)
-    tags = np.concatenate(gmsh.model.mesh.getElements(3)[1])
-    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
-    qt = gmsh.model.mesh.getElementType("Quadrangle", p)
-    uv = [c for i in range(17) for j in range(17) for c in (-1 + i / 8, -1 + j / 8, 0)]
-    bf = np.reshape(gmsh.model.mesh.getBasisFunctions(qt, uv, "Lagrange")[1], (289, -1))
-    nt, xyz, _ = gmsh.model.mesh.getNodes()
-    x = np.zeros((int(nt.max()) + 1, 3))
-    x[nt] = np.reshape(xyz, (-1, 3))
-    worst = 0.0
-    for s in sph:
-        nodes = np.reshape(gmsh.model.mesh.getElementsByType(qt, s)[1], (-1, bf.shape[1]))
-        pts = np.einsum("qn,enc->eqc", bf, x[nodes])
-        worst = max(worst, float(np.abs(np.linalg.norm(pts, axis=2) - R).max()))
-    print(json.dumps({"method": a.method, "order": p, "elements": len(tags), "invalid": int((dj <= 0).sum()),
-                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
+    curve_and_judge(a.order, a.method, sph, lambda pts: np.abs(np.linalg.norm(pts, axis=2) - R))
 gmsh.finalize()

@@ -1,0 +1,46 @@
+"""Gmsh's own curving of the mesh in the current Gmsh model, judged like
+`deformesh curve` judges its result (used by cylinder_bl.py and
+sphere_bl.py).
+
+curve_and_judge(p, method, surfaces, off_shape): setOrder(p), then for
+method "fastcurving" / "elastic" the optimiser HighOrderFastCurving /
+HighOrderElastic (Mesh.HighOrderOptimize 4 / 3), timed; prints JSON
+{"method", "order", "elements", "invalid" (3D elements with minDetJac <= 0),
+"min_sj" (Gmsh's bound), "boundary_sample_distance" (the largest
+off_shape(points) of 17 x 17 points per quad face of the given surfaces),
+"seconds"}, or {"method", "error"} and exit status 1 when Gmsh throws."""
+import json, time
+import gmsh
+
+
+def curve_and_judge(p, method, surfaces, off_shape):
+    # numpy only now: imported before the mesh is generated, it changes
+    # Gmsh's element connectivity (pointer-ordered sets)
+    import numpy as np
+
+    try:
+        t0 = time.perf_counter()
+        gmsh.model.mesh.setOrder(p)
+        if method != "setorder":
+            gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if method == "fastcurving" else 3)
+            gmsh.model.mesh.optimize("HighOrderFastCurving" if method == "fastcurving" else "HighOrderElastic")
+        secs = time.perf_counter() - t0
+    except Exception as e:
+        print(json.dumps({"method": method, "error": str(e)}))
+        raise SystemExit(1)
+    tags = np.concatenate(gmsh.model.mesh.getElements(3)[1])
+    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
+    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+    qt = gmsh.model.mesh.getElementType("Quadrangle", p)
+    uv = [c for i in range(17) for j in range(17) for c in (-1 + i / 8, -1 + j / 8, 0)]
+    bf = np.reshape(gmsh.model.mesh.getBasisFunctions(qt, uv, "Lagrange")[1], (289, -1))
+    nt, xyz, _ = gmsh.model.mesh.getNodes()
+    x = np.zeros((int(nt.max()) + 1, 3))
+    x[nt] = np.reshape(xyz, (-1, 3))
+    worst = 0.0
+    for s in surfaces:
+        nodes = np.reshape(gmsh.model.mesh.getElementsByType(qt, s)[1], (-1, bf.shape[1]))
+        pts = np.einsum("qn,enc->eqc", bf, x[nodes])
+        worst = max(worst, float(off_shape(pts).max()))
+    print(json.dumps({"method": method, "order": p, "elements": len(tags), "invalid": int((dj <= 0).sum()),
+                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
