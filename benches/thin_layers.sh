@@ -76,7 +76,8 @@ for case in $CASES; do
             "$PYTHON" - "${out%.msh}.report.json" "$group" "$(printf '%s\n' "${times[@]}" | median)" <<'EOF'
 import json, sys
 r = json.load(open(sys.argv[1])); q = r["quality"]; d = q["boundary_data"]
-how = "Dirichlet data after sliding" if d["sliding_left"] else ("Dirichlet" if d["dirichlet"] else "sliding")
+left = d["sliding_left"]
+how = f"Dirichlet data after sliding stopped at t = {left['t']:.2f}" if left else ("Dirichlet" if d["dirichlet"] else "sliding")
 print(f"| {r['input'].split('/')[-1][:-4]} | {q['order']} | deformesh ({how}, settled by {q['settling']['how']}) | {len(q['invalid_elements'])} | {q['scaled_jacobian']['min']:.3f} | {q['boundary_error'][sys.argv[2]]['samples']:.2e} | {float(sys.argv[3]):.2f} |")
 EOF
         fi

@@ -167,7 +167,13 @@ fn run(cli: Cli) -> Result<()> {
                 r.quality.boundary_node_distance, r.quality.boundary_sample_distance
             );
             if let Some(s) = r.quality.boundary_data.sliding_left {
-                let left = if s.t < 1.0 { format!("inverted {} element(s) of curved facets by t = {:.3}", s.elements, s.t) } else { format!("left {} element(s) not certified valid", s.elements) };
+                let left = if s.t == 1.0 {
+                    format!("left {} element(s) not certified valid", s.elements)
+                } else if s.elements > 0 {
+                    format!("inverted {} element(s) of curved facets by t = {:.3}", s.elements, s.t)
+                } else {
+                    format!("was stopped at t = {:.3}: its first rows' heights changed by {:.2} per unit t (its drift), which would invert them", s.t, s.first_row_drift)
+                };
                 println!("algorithm 2: sliding {left}; this mesh is from a run with Dirichlet data (straight paths)");
             }
             println!("{}", settling_line(&r.quality.settling, r.quality.boundary_data.dirichlet));

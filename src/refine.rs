@@ -655,7 +655,7 @@ impl<const D: usize> RefineBoundary<D> {
                 let mut q = s;
                 q[k] = x;
                 // the image is Γ_t at t = 1
-                norm(self.tangent(c, q, 1.0, k))
+                norm(self.precise_tangent(c, q, k))
             };
             // composite 5-point Gauss–Legendre on 4 pieces of [0, x]
             let length = |x: f64| {
@@ -707,6 +707,21 @@ impl<const D: usize> RefineBoundary<D> {
         b[k] += h;
         let (pa, pb) = (self.carrier_point(c, a, t).0, self.carrier_point(c, b, t).0);
         std::array::from_fn(|i| (pb[i] - pa[i]) / (2.0 * h))
+    }
+
+    /// d/ds_k of the image Γ_1 at s, by the fourth-order central
+    /// difference. Why not [`Self::tangent`]: its rounding (~1e-10 of the
+    /// speed) put the arc places off by enough to floor the p = 4
+    /// boundary error at about 6e-14 on the quarter disk (measured).
+    fn precise_tangent(&self, c: usize, s: [f64; 2], k: usize) -> [f64; D] {
+        let h = 1e-3;
+        let at = |x: f64| {
+            let mut q = s;
+            q[k] += x;
+            self.carrier_point(c, q, 1.0).0
+        };
+        let (a, b, d, e) = (at(-2.0 * h), at(-h), at(h), at(2.0 * h));
+        std::array::from_fn(|i| (a[i] - 8.0 * b[i] + 8.0 * d[i] - e[i]) / (12.0 * h))
     }
 
     fn constraint(&self, i: usize, t: f64, f: f64) -> Constraint<D> {

@@ -16,6 +16,7 @@ use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Options of Algorithms 2 and 3.
@@ -244,10 +245,10 @@ pub struct CurvedQuality {
     /// height: the distance from a node of a curved boundary element to the
     /// node across its cell (the opposite face, same face coordinates),
     /// curved against straight, at the coarse vertices and over all nodes.
-    pub first_layer_change: std::collections::BTreeMap<String, FirstLayer>,
+    pub first_layer_change: BTreeMap<String, FirstLayer>,
     /// Per curved group, the largest distance of its nodes and of its
     /// sampled boundary to its shape.
-    pub boundary_error: std::collections::BTreeMap<String, BoundaryError>,
+    pub boundary_error: BTreeMap<String, BoundaryError>,
     /// The settling pass that puts the sliding nodes at their intended
     /// places.
     pub settling: Settling,
@@ -274,15 +275,41 @@ pub struct SlidingLeft {
     /// facets) or not certified valid (at t = 1).
     pub elements: usize,
     /// Where the run stopped: at the first element of a curved facet
-    /// certified inverted, or 1.
+    /// certified inverted, where the drift was foreseen, or 1.
     pub t: f64,
+    /// The largest relative change of a first row's height (a curved
+    /// facet's node to the node one row in) per unit of t when it stopped:
+    /// above [`DRIFT_LIMIT`] the run is stopped before t = 1.
+    pub first_row_drift: f64,
 }
+
+/// A sliding run whose first rows' heights change faster than this, per
+/// unit of pseudo-time, is stopped and run with Dirichlet data. Why: the
+/// sliding drift (docs/METHOD.md §9) grows about linearly in t, so the
+/// first steps foretell it. Measured from the first step on: 1.9 – 5.2
+/// in every run sliding left invalid (1e-5 layers at p = 3 in 2D and 3D,
+/// p = 4 in 2D; the sphere's 1e-4 layer at p = 3), 0.22 – 0.68 in the
+/// runs it left valid (the extruded 1e-5 and 1e-3 layers at p = 2, 1e-3
+/// at p = 3; the sphere at p = 2; the 2D 1e-3 layer at p = 3, 4), but 1.16
+/// – 1.35 in one it left valid too (the 2D 1e-5 layer with wall size 0.1
+/// at p = 3; 2.0 on the sphere's 2 × 2 O-grid at p = 3). So it foretells
+/// a drift larger than the first rows themselves, not always an inverted
+/// element; 1 means a first row twice its height by t = 1. A stop too
+/// many costs nothing but the sliding start: the settling puts the new
+/// nodes at the same places after either run (3.81e-7 on that layer both
+/// ways); a stop too few costs the whole sliding run. Not applied when
+/// the settling is off (`--mode sliding_only` asks for sliding's places).
+pub const DRIFT_LIMIT: f64 = 1.0;
 
 /// The elements with a node on a curved facet, watched during a sliding
 /// run of Algorithm 2.
 struct Watch {
     certifier: Certifier,
     elements: Vec<Vec<usize>>,
+    /// Per node of a curved facet of a watched element, the node one row
+    /// in from it and their distance at the start: the first rows'
+    /// heights, which sliding's drift changes ([`Watch::drift`]).
+    rows: Vec<(usize, usize, f64)>,
 }
 
 impl Watch {
@@ -293,8 +320,14 @@ impl Watch {
                 nodes.iter().for_each(|&n| on[n] = true);
             }
         }
-        let elements = sub.elements.iter().filter(|e| e.iter().any(|&n| on[n])).cloned().collect();
-        Ok(Watch { certifier: Certifier::new(sub.p, spacing)?, elements })
+        let elements: Vec<Vec<usize>> = sub.elements.iter().filter(|e| e.iter().any(|&n| on[n])).cloned().collect();
+        let rows = first_rows::<D>(&elements, sub.p, &on, sub.fine.nodes());
+        Ok(Watch { certifier: Certifier::new(sub.p, spacing)?, elements, rows })
+    }
+
+    /// The largest relative change of a first row's height since the start.
+    fn drift<const D: usize>(&self, nodes: &[[f64; D]]) -> f64 {
+        self.rows.par_iter().map(|&(a, b, h0)| (crate::numeric::dist2(nodes[a], nodes[b]).sqrt() / h0 - 1.0).abs()).reduce(|| 0.0, f64::max)
     }
 
     /// How many watched elements are certified inverted (det J ≤ 0 at a
@@ -309,6 +342,31 @@ impl Watch {
             })
             .count()
     }
+}
+
+/// Per node of a face of `elements` (tensor-ordered, order p) that lies
+/// on the boundary (`on`), the node one row in from it and their distance.
+fn first_rows<const D: usize>(elements: &[Vec<usize>], p: usize, on: &[bool], nodes: &[[f64; D]]) -> Vec<(usize, usize, f64)> {
+    let n1 = p + 1;
+    let count = n1.pow(D as u32);
+    let index = |lin: usize, d: usize| lin / n1.pow(d as u32) % n1;
+    let mut rows = Vec::new();
+    for e in elements {
+        for d in 0..D {
+            for (side, inward) in [(0, 1isize), (p, -1)] {
+                let face: Vec<usize> = (0..count).filter(|&l| index(l, d) == side).collect();
+                if !face.iter().all(|&l| on[e[l]]) {
+                    continue;
+                }
+                let step = inward * n1.pow(d as u32) as isize;
+                for &l in &face {
+                    let (a, b) = (e[l], e[(l as isize + step) as usize]);
+                    rows.push((a, b, crate::numeric::dist2(nodes[a], nodes[b]).sqrt()));
+                }
+            }
+        }
+    }
+    rows
 }
 
 /// What the settling pass did ([`CurveOptions::settle`]).
@@ -460,21 +518,22 @@ where
     let mut certify_s = 0.0;
     let mut sliding_left = None;
     let watch = Watch::new(&sub, &parts2, opts.spacing)?;
-    let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor: false, certify_s: 0.0 };
+    let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor: false, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
     let mut attempts = 0;
     let slid = loop {
         let (flow, dirichlet) = schedule[attempts].clone();
         attempts += 1;
-        // a sliding run with a Dirichlet run after it stops at the first
-        // element of a curved facet certified inverted: the drift that
-        // inverts it only grows. It showed at t = 0.87–0.96 on the layers
-        // measured, so this saves the last steps and a full certification
+        // a sliding run with a Dirichlet run after it stops once its first
+        // rows drift faster than DRIFT_LIMIT (from the first step on the
+        // layers measured), or at the first element of a curved facet
+        // certified inverted: the drift that inverts it only grows (that
+        // showed at t = 0.87–0.96, too late to save much)
         let watched = (!dirichlet && attempts < schedule.len()).then_some(&watch);
         let parts = if dirichlet { &dirichlet_parts } else { &parts2 };
         let mut pass = match runner.run(parts, &flow, watched, &mut progress)? {
             Ok(pass) => pass,
             Err(left) => {
-                tracing::info!("sliding inverted {} elements by t = {:.3}: again with Dirichlet data", left.elements, left.t);
+                tracing::info!("sliding stopped at t = {:.3} ({} elements inverted, first rows' drift {:.2} per unit t): again with Dirichlet data", left.t, left.elements, left.first_row_drift);
                 sliding_left = Some(left);
                 continue;
             }
@@ -488,7 +547,7 @@ where
             break pass;
         }
         if !dirichlet {
-            sliding_left = Some(SlidingLeft { elements: pass.quality.invalid_elements.len(), t: 1.0 });
+            sliding_left = Some(SlidingLeft { elements: pass.quality.invalid_elements.len(), t: 1.0, first_row_drift: runner.drift });
             tracing::info!("sliding left {} elements not certified valid: again with Dirichlet data", pass.quality.invalid_elements.len());
         }
     };
@@ -545,6 +604,10 @@ struct Runner<'a, M, const D: usize> {
     factor: bool,
     /// Seconds spent certifying.
     certify_s: f64,
+    /// The last watched run's [`SlidingLeft::first_row_drift`].
+    drift: f64,
+    /// A watched run is stopped once its drift passes this.
+    drift_limit: f64,
 }
 
 impl<M, const D: usize> Runner<'_, M, D> {
@@ -566,15 +629,23 @@ impl<M, const D: usize> Runner<'_, M, D> {
             flow.solver = SolverChoice::CholeskyCg;
         }
         let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(self.sub.refine_mesh(), parts.to_vec(), JacobianField::uniform(), flow)?;
-        let mut inverted = 0;
+        let (mut inverted, mut drift) = (0, 0.0);
         def.run_while(|d| {
             progress(d.t, &d.stats);
-            inverted = watch.map_or(0, |w| w.inverted(d.mesh.mesh.nodes()));
+            let Some(w) = watch else { return true };
+            let nodes = d.mesh.mesh.nodes();
+            drift = w.drift(nodes) / d.t;
+            tracing::debug!("t = {:.4}: first rows' height change {drift:.3e} per unit t", d.t);
+            if drift > self.drift_limit && d.t < 1.0 {
+                return false;
+            }
+            inverted = w.inverted(nodes);
             inverted == 0
         })?;
         self.factor |= def.solver_fell_back();
-        if inverted > 0 {
-            return Ok(Err(SlidingLeft { elements: inverted, t: def.t }));
+        self.drift = drift;
+        if def.t < 1.0 || inverted > 0 {
+            return Ok(Err(SlidingLeft { elements: inverted, t: def.t, first_row_drift: drift }));
         }
         let mesh = CurvedMesh {
             p: self.sub.p,
@@ -753,8 +824,8 @@ fn largest_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> f64 {
 /// Per moving (or curved slip) part, the largest relative change of the
 /// first-layer height between the straight positions `straight` and the
 /// mesh: see [`CurvedQuality::first_layer_change`].
-pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64; D]], parts: &[BoundaryPart<D>]) -> std::collections::BTreeMap<String, FirstLayer> {
-    use std::collections::{BTreeMap, HashMap};
+pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64; D]], parts: &[BoundaryPart<D>]) -> BTreeMap<String, FirstLayer> {
+    use std::collections::HashMap;
     let p = mesh.p;
     let n1 = p + 1;
     let lin = |idx: [usize; 3]| (0..D).map(|d| idx[d] * n1.pow(d as u32)).sum::<usize>();
@@ -826,7 +897,7 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
 
 /// Per curved group, the boundary error: the largest distance of its nodes
 /// and of its sampled boundary to its shape.
-pub fn boundary_errors<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<std::collections::BTreeMap<String, BoundaryError>, HighOrderError> {
+pub fn boundary_errors<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<BTreeMap<String, BoundaryError>, HighOrderError> {
     let nodes = per_part(mesh, parts, |b, target| b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max));
     let sampled = sampled_per_part(mesh, parts, samples)?;
     Ok(parts
