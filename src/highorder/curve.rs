@@ -11,7 +11,7 @@
 use super::{check_order, nodes_1d, Basis1d, HighOrderError, Spacing};
 use crate::quality::certify::{Certificate, Certifier, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
-use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice};
+use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_AMG_UNKNOWNS, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
@@ -518,7 +518,11 @@ where
     let mut certify_s = 0.0;
     let mut sliding_left = None;
     let watch = Watch::new(&sub, &parts2, opts.spacing)?;
-    let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor: false, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
+    let aspect = largest_aspect(coarse.nodes(), coarse.cells());
+    let unknowns = D * sub.fine.nodes().len();
+    let factor = starts_with_factor::<D>(opts.flow.solver, aspect, unknowns);
+    tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns: auto starts with the factor: {factor}");
+    let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
     let mut attempts = 0;
     let slid = loop {
         let (flow, dirichlet) = schedule[attempts].clone();
@@ -592,6 +596,34 @@ where
     quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
     Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
+}
+
+/// Whether `auto`, which would pick the multigrid for this many unknowns,
+/// starts Algorithm 2 with CG on a Cholesky factor instead: on cells
+/// thinner than [`AUTO_FACTOR_ASPECT`] the multigrid needs 10–100× its
+/// iterations, and `auto` turns to the factor after a failed solve anyway
+/// when the system is small enough for it.
+fn starts_with_factor<const D: usize>(solver: SolverChoice, aspect: f64, unknowns: usize) -> bool {
+    solver == SolverChoice::Auto && aspect > AUTO_FACTOR_ASPECT && unknowns > AUTO_AMG_UNKNOWNS[usize::from(D == 3)] && unknowns <= AUTO_FACTOR_LIMIT
+}
+
+/// The largest ratio, over the cells, of the longest to the shortest
+/// distance between two of a cell's corners (1.4 – 1.7 for squares and
+/// cubes; the layer's length over its height in a boundary layer).
+fn largest_aspect<const D: usize, const N: usize>(nodes: &[[f64; D]], cells: &[[usize; N]]) -> f64 {
+    cells
+        .par_iter()
+        .map(|c| {
+            let (mut short, mut long) = (f64::INFINITY, 0.0f64);
+            for a in 0..N {
+                for b in a + 1..N {
+                    let d = crate::numeric::dist2(nodes[c[a]], nodes[c[b]]);
+                    (short, long) = (short.min(d), long.max(d));
+                }
+            }
+            (long / short).sqrt()
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// What every run of Algorithm 2 in one `curve` shares.
