@@ -172,7 +172,7 @@ fn run(cli: Cli) -> Result<()> {
                 } else if s.elements > 0 {
                     format!("inverted {} element(s) of curved facets by t = {:.3}", s.elements, s.t)
                 } else {
-                    format!("was stopped at t = {:.3}: its first rows' heights changed by {:.2} per unit t (its drift), which would invert them", s.t, s.first_row_drift)
+                    format!("was stopped at t = {:.3}: its first rows' heights changed by {:.2} times themselves per unit t (the sliding drift; the limit is {})", s.t, s.first_row_drift, deformesh::highorder::curve::DRIFT_LIMIT)
                 };
                 println!("algorithm 2: sliding {left}; this mesh is from a run with Dirichlet data (straight paths)");
             }
