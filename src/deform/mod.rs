@@ -361,15 +361,19 @@ pub const AUTO_FACTOR_ASPECT: f64 = 100.0;
 pub const AUTO_SLOW_MULTIGRID: usize = 100;
 
 impl SolverChoice {
-    /// The solver this choice makes for a `dim`-D system of `unknowns`.
-    pub fn make(self, dim: usize, unknowns: usize, tolerance: f64) -> Box<dyn SpdSolver> {
-        let choice = match self {
-            // large: multigrid, kept as `Auto` for its fallback below
+    /// The choice made for a `dim`-D system of `unknowns`: `Auto` stays
+    /// `Auto` (the multigrid, with its fallback) only when large.
+    pub fn resolved(self, dim: usize, unknowns: usize) -> SolverChoice {
+        match self {
             SolverChoice::Auto if unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)] => SolverChoice::Auto,
             SolverChoice::Auto => SolverChoice::CholeskyCg,
             chosen => chosen,
-        };
-        match choice {
+        }
+    }
+
+    /// The solver this choice makes for a `dim`-D system of `unknowns`.
+    pub fn make(self, dim: usize, unknowns: usize, tolerance: f64) -> Box<dyn SpdSolver> {
+        match self.resolved(dim, unknowns) {
             SolverChoice::Cholesky => Box::new(CholeskySolver::new()),
             SolverChoice::Cg => {
                 let mut cg = ConjugateGradient::new(Jacobi::default());

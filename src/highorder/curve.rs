@@ -11,7 +11,7 @@
 use super::{check_order, nodes_1d, Basis1d, HighOrderError, Spacing};
 use crate::quality::certify::{Certificate, Certifier, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
-use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_AMG_UNKNOWNS, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
+use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
@@ -347,26 +347,31 @@ impl Watch {
 /// Per node of a face of `elements` (tensor-ordered, order p) that lies
 /// on the boundary (`on`), the node one row in from it and their distance.
 fn first_rows<const D: usize>(elements: &[Vec<usize>], p: usize, on: &[bool], nodes: &[[f64; D]]) -> Vec<(usize, usize, f64)> {
-    let n1 = p + 1;
-    let count = n1.pow(D as u32);
-    let index = |lin: usize, d: usize| lin / n1.pow(d as u32) % n1;
     let mut rows = Vec::new();
     for e in elements {
         for d in 0..D {
-            for (side, inward) in [(0, 1isize), (p, -1)] {
-                let face: Vec<usize> = (0..count).filter(|&l| index(l, d) == side).collect();
-                if !face.iter().all(|&l| on[e[l]]) {
-                    continue;
-                }
-                let step = inward * n1.pow(d as u32) as isize;
-                for &l in &face {
-                    let (a, b) = (e[l], e[(l as isize + step) as usize]);
-                    rows.push((a, b, crate::numeric::dist2(nodes[a], nodes[b]).sqrt()));
+            for side in [0, p] {
+                let column: Vec<(usize, usize, bool)> = face_columns::<D>(e, p, d, side, 1).collect();
+                if column.iter().all(|&(a, _, _)| on[a]) {
+                    rows.extend(column.iter().map(|&(a, b, _)| (a, b, crate::numeric::dist2(nodes[a], nodes[b]).sqrt())));
                 }
             }
         }
     }
     rows
+}
+
+/// The nodes of face `side` (0 or p) across axis `d` of the tensor-ordered
+/// order-p element `el`, each with the node `depth` rows in from it and
+/// whether it is one of the element's corners.
+fn face_columns<const D: usize>(el: &[usize], p: usize, d: usize, side: usize, depth: usize) -> impl Iterator<Item = (usize, usize, bool)> + '_ {
+    let n1 = p + 1;
+    let index = move |l: usize, a: usize| l / n1.pow(a as u32) % n1;
+    let step = depth * n1.pow(d as u32);
+    (0..n1.pow(D as u32)).filter(move |&l| index(l, d) == side).map(move |l| {
+        let inner = if side == 0 { l + step } else { l - step };
+        (el[l], el[inner], (0..D).all(|a| index(l, a) % p == 0))
+    })
 }
 
 /// What the settling pass did ([`CurveOptions::settle`]).
@@ -604,7 +609,7 @@ where
 /// iterations, and `auto` turns to the factor after a failed solve anyway
 /// when the system is small enough for it.
 fn starts_with_factor<const D: usize>(solver: SolverChoice, aspect: f64, unknowns: usize) -> bool {
-    solver == SolverChoice::Auto && aspect > AUTO_FACTOR_ASPECT && unknowns > AUTO_AMG_UNKNOWNS[usize::from(D == 3)] && unknowns <= AUTO_FACTOR_LIMIT
+    solver.resolved(D, unknowns) == SolverChoice::Auto && aspect > AUTO_FACTOR_ASPECT && unknowns <= AUTO_FACTOR_LIMIT
 }
 
 /// The largest ratio, over the cells, of the longest to the shortest
@@ -895,27 +900,13 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
         let Some(PartKind::Move { .. }) = parts.get(b.part).map(|q| &q.kind) else { continue };
         let grid_corners = if D == 2 { vec![b.nodes[0], b.nodes[p]] } else { vec![b.nodes[0], b.nodes[p], b.nodes[n1 * n1 - 1], b.nodes[n1 * p]] };
         let Some(&(e, d, side)) = faces.get(&corners_key(grid_corners)) else { continue };
-        let el = &mesh.cells[e];
         let mut worst = FirstLayer::default();
-        for k in 0..n1.pow(D as u32 - 1) {
-            let mut idx = [0; 3];
-            let mut rest = k;
-            for a in 0..D {
-                idx[a] = if a == d {
-                    side
-                } else {
-                    let v = rest % n1;
-                    rest /= n1;
-                    v
-                };
-            }
-            let node = el[lin(idx)];
-            idx[d] = p - side;
-            let opp = el[lin(idx)];
+        // each face node and the node across the cell from it
+        for (node, opp, corner) in face_columns::<D>(&mesh.cells[e], p, d, side, p) {
             let (h0, h) = (dist(straight, node, opp), dist(&mesh.nodes, node, opp));
             let change = (h / h0 - 1.0).abs();
             worst.all_nodes = worst.all_nodes.max(change);
-            if (0..D).all(|a| idx[a] == 0 || idx[a] == p) {
+            if corner {
                 worst.vertices = worst.vertices.max(change);
             }
         }
