@@ -32,12 +32,6 @@ DIR=target/thin-layers-bench
 mkdir -p "$DIR/out"
 [[ -x $DEFORMESH ]] || cargo build --release
 
-cat > "$DIR/sphere.toml" <<'EOF'
-[[group]]
-name = "sphere"
-kind = "curve"
-shape = { type = "sphere", centre = [0.0, 0.0, 0.0], radius = 0.5 }
-EOF
 
 # the mesh of a case, written to $DIR/<case>.msh; with extra arguments,
 # Gmsh's curving of it (prints its JSON line last)
@@ -59,7 +53,7 @@ printf '| case | p | method | invalid | min scaled J | boundary error | seconds 
 for case in $CASES; do
     gmsh_case "$case" > /dev/null
     geometry=tests/data/extruded_cylinder.geometry.toml; group=wall
-    [[ $case == sphere* ]] && geometry=$DIR/sphere.toml && group=sphere
+    [[ $case == sphere* ]] && geometry=tests/data/sphere.geometry.toml && group=sphere
     for p in $ORDERS; do
         times=()
         for _ in $(seq "$REPEAT"); do

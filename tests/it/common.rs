@@ -26,13 +26,19 @@ pub fn python() -> PathBuf {
     venv
 }
 
+/// Runs `tests/python/<script> ARGS...`, asserts it succeeded, and
+/// returns what it printed.
+pub fn run_script<S: AsRef<std::ffi::OsStr>>(script: &str, args: &[S]) -> Vec<u8> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python").join(script);
+    let out = Command::new(python()).arg(&script).args(args).output().expect("cannot start Python");
+    assert!(out.status.success(), "{} failed: {}", script.display(), String::from_utf8_lossy(&out.stderr));
+    out.stdout
+}
+
 /// Runs `tests/python/<script> <file>` and parses the JSON it prints.
 pub fn run_checker(script: &str, file: &Path) -> Value {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python").join(script);
-    let out = Command::new(python()).arg(&script).arg(file).output().expect("cannot start Python");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{} failed: {stderr}", script.display());
-    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("bad JSON from {}: {e}\n{stderr}", script.display()))
+    let out = run_script(script, &[file]);
+    serde_json::from_slice(&out).unwrap_or_else(|e| panic!("bad JSON from {script}: {e}"))
 }
 
 /// The JSON array `v` as `f64`s.

@@ -339,11 +339,9 @@ fn fuzzed_inputs_never_panic() {
 #[test]
 fn binary_msh_from_gmsh_reads_like_the_ascii_file() {
     let dir = tempfile::tempdir().unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/to_binary.py");
     for file in ["cylinder_bl_coarse.msh", "ball_octant_hex.msh"] {
         let bin = dir.path().join(format!("bin_{file}"));
-        let out = std::process::Command::new(common::python()).arg(&script).arg(data(file)).arg(&bin).output().unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        common::run_script("to_binary.py", &[data(file), bin.clone()]);
         assert!(deformesh::io::msh::is_binary(&std::fs::read(&bin).unwrap()));
         if file.starts_with("cyl") {
             let (a, b) = (deformesh::io::msh::read_msh(&data(file)).unwrap(), deformesh::io::msh::read_msh(&bin).unwrap());
@@ -406,10 +404,9 @@ fn extruded_bl(dir: &Path, first: f64, wall_size: f64, far_size: f64) -> PathBuf
 
 /// Runs tests/python/cylinder_bl.py; its standard output.
 fn cylinder_bl(out: &Path, first: f64, wall_size: f64, options: &[String]) -> Vec<u8> {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/cylinder_bl.py");
-    let run = std::process::Command::new(common::python()).arg(script).args([first.to_string(), wall_size.to_string()]).arg(out).args(options).output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    run.stdout
+    let mut args = vec![first.to_string(), wall_size.to_string(), out.display().to_string()];
+    args.extend_from_slice(options);
+    common::run_script("cylinder_bl.py", &args)
 }
 
 #[test]
@@ -482,15 +479,12 @@ fn extruded_thin_boundary_layers_with_slip_end_planes_stay_valid_at_p2_and_p3() 
 /// mesh and CAD.
 fn sphere_bl(dir: &Path, first: f64, n: usize, order: Option<usize>) -> (PathBuf, serde_json::Value) {
     let out = dir.join("sphere_bl.msh");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/sphere_bl.py");
-    let mut cmd = std::process::Command::new(common::python());
-    cmd.arg(script).args([first.to_string(), n.to_string()]).arg(&out);
+    let mut args = vec![first.to_string(), n.to_string(), out.display().to_string()];
     if let Some(p) = order {
-        cmd.args(["--order".to_string(), p.to_string(), "--method".into(), "setorder".into()]);
+        args.extend(["--order".to_string(), p.to_string(), "--method".into(), "setorder".into()]);
     }
-    let run = cmd.output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let last = String::from_utf8_lossy(&run.stdout).lines().last().unwrap().to_string();
+    let stdout = common::run_script("sphere_bl.py", &args);
+    let last = String::from_utf8_lossy(&stdout).lines().last().unwrap().to_string();
     (out, serde_json::from_str(&last).unwrap())
 }
 
@@ -505,7 +499,7 @@ fn a_hex_boundary_layer_around_a_sphere_stays_valid_at_p2_and_p3() {
     // a patch at p = 2, 2 × 2 at p = 3 (a 3 × 3 one takes a minute at
     // p = 3: benches/thin_layers.sh)
     let dir = tempfile::tempdir().unwrap();
-    let geometry = "[[group]]\nname = \"sphere\"\nkind = \"curve\"\nshape = { type = \"sphere\", centre = [0.0, 0.0, 0.0], radius = 0.5 }\n";
+    let geometry = include_str!("../data/sphere.geometry.toml");
     for (p, n, ratio) in [(2, 3, 0.55), (3, 2, 0.35)] {
         let (input, gmsh) = sphere_bl(dir.path(), 1e-4, n, Some(p));
         let cells = deformesh::io::msh::read_hex_msh(&input).unwrap().cells.len();
@@ -647,13 +641,11 @@ fn sliding_boundaries_converge_at_the_order_on_a_quarter_disk() {
     // 4.0 / 4.0 / 6.0 at p = 2 / 3 / 4, every element valid, every new
     // arc node settled by moving it alone
     let dir = tempfile::tempdir().unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/quarter_disk.py");
     let meshes: Vec<(PathBuf, f64)> = [4, 8, 16]
         .iter()
         .map(|&n| {
             let file = dir.path().join(format!("quarter_disk_{n}.msh"));
-            let out = std::process::Command::new(common::python()).arg(&script).arg(n.to_string()).arg(&file).output().unwrap();
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            common::run_script("quarter_disk.py", &[n.to_string(), file.display().to_string()]);
             let h = group_h(&file, "arc");
             (file, h)
         })

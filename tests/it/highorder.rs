@@ -219,10 +219,8 @@ fn quality_reads_gmsh_high_order_files_and_finds_the_invalid_elements_gmsh_finds
     let dir = tempfile::tempdir().unwrap();
     for p in [2, 3] {
         let file = dir.path().join(format!("disk{p}.msh"));
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python/make_gmsh_highorder.py");
-        let out = std::process::Command::new(common::python()).arg(script).arg(&file).arg(p.to_string()).output().unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let g: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let out = common::run_script("make_gmsh_highorder.py", &[file.display().to_string(), p.to_string()]);
+        let g: serde_json::Value = serde_json::from_slice(&out).unwrap();
         let gmin = common::floats(&g["minDetJac"]);
         let (code, q) = quality_cli(&file);
         assert_eq!(q["order"], p);
