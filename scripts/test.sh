@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 
 if [[ -z "${DEFORMESH_PYTHON:-}" && ! -x .venv/bin/python ]]; then
     python3 -m venv .venv
-    .venv/bin/pip install --quiet "gmsh==4.15.*" "vtk==9.7.*"
+    .venv/bin/pip install --quiet "gmsh==4.15.*" "vtk==9.7.*" "mfem==4.10.*" "meshio==5.3.*"
 fi
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use deformesh::app::case::{Case, DEMO_CASE};
 use deformesh::app::case::AnySetup;
 use deformesh::deform::SolverChoice;
-use deformesh::app::driver::{run_any, Progress, RunError, REPORT};
+use deformesh::app::driver::{exit, run_any, OutputFormat, Progress, RunError, REPORT};
 use deformesh::io::folder::check_run_folder;
 use deformesh::highorder::curve::{certify_mesh, CurvedQuality};
 use deformesh::io::msh::MshError;
@@ -15,7 +15,15 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
-#[command(name = "deformesh", version, about = "Curved, boundary-conforming quad and hex meshes by the deformation method")]
+#[command(
+    name = "deformesh",
+    version,
+    about = "Curved, boundary-conforming quad and hex meshes by the deformation method",
+    after_help = "Exit codes: 0 success; 1 bad input (the message names the file, line, field or element); \
+                  2 the mesh is or would be invalid (the elements are named, nothing is written); \
+                  3 a linear solver failed (not the input's fault; nothing is written); \
+                  64 a usage error (an unknown option, a missing or malformed argument); 130 interrupted (Ctrl-C)."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -70,9 +78,14 @@ enum Command {
         /// `shape_tolerance` may raise it).
         #[arg(long, default_value_t = deformesh::highorder::curve::DEFAULT_SHAPE_TOLERANCE)]
         shape_tolerance: f64,
-        /// The curved mesh to write.
+        /// The curved mesh to write: its extension chooses the format
+        /// (`.msh` Gmsh MSH 4.1, `.mesh` MFEM, `.inp` ABAQUS for Trixi.jl).
         #[arg(short, long)]
         out: PathBuf,
+        /// The format, where the extension does not say it: msh41, msh22
+        /// (Gmsh MSH 2.2, `.msh`), mfem or abaqus.
+        #[arg(long)]
+        format: Option<String>,
     },
     /// Print quality figures of a quad or hex mesh (linear or high order) in Gmsh MSH 4.1 format.
     Quality {
@@ -105,14 +118,48 @@ fn main() {
         .with_writer(std::io::stderr)
         .init();
     deformesh::io::folder::install_interrupt_handler();
-    let code = match run(Cli::parse()) {
-        Ok(()) => 0,
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // help and version are printed and succeed; anything else is a usage error
+        Err(e) => {
+            let _ = e.print();
+            std::process::exit(if e.use_stderr() { exit::USAGE } else { exit::OK });
+        }
+    };
+    let code = match run(cli) {
+        Ok(()) => exit::OK,
         Err(e) => {
             eprintln!("error: {e:#}");
-            e.downcast_ref::<RunError>().map_or(1, RunError::exit_code)
+            match e.downcast_ref::<RunError>() {
+                Some(r) => r.exit_code(),
+                None if e.is::<Usage>() => exit::USAGE,
+                None => exit::BAD_INPUT,
+            }
         }
     };
     std::process::exit(code);
+}
+
+/// A command-line argument whose value is wrong (exit code 64, as clap's
+/// own errors).
+#[derive(Debug)]
+struct Usage(String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// Fails with a [`Usage`] error unless `ok`.
+fn usage(ok: bool, message: impl FnOnce() -> String) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Usage(message()).into())
+    }
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -134,23 +181,25 @@ fn run(cli: Cli) -> Result<()> {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out, "<built-in demo>")
         }
-        Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, shape_tolerance, out } => {
-            anyhow::ensure!(shape_tolerance.is_finite() && shape_tolerance > 0.0, "--shape-tolerance must be a positive number, got {shape_tolerance}");
-            deformesh::highorder::check_order(order).map_err(|e| anyhow::anyhow!("--order: {e}"))?;
-            anyhow::ensure!(steps != Some(0), "--steps must be at least 1");
+        Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, shape_tolerance, out, format } => {
+            usage(shape_tolerance.is_finite() && shape_tolerance > 0.0, || format!("--shape-tolerance must be a positive number, got {shape_tolerance}"))?;
+            deformesh::highorder::check_order(order).map_err(|e| Usage(format!("--order: {e}")))?;
+            usage(steps != Some(0), || "--steps must be at least 1".into())?;
             let spacing: deformesh::highorder::Spacing = serde_json::from_value(serde_json::Value::String(spacing.clone()))
-                .map_err(|_| anyhow::anyhow!("--spacing must be equispaced or gauss_lobatto, got `{spacing}`"))?;
+                .map_err(|_| Usage(format!("--spacing must be equispaced or gauss_lobatto, got `{spacing}`")))?;
             let (dirichlet, settle) = match mode.as_str() {
                 "sliding" => (false, true),
                 "sliding_only" => (false, false),
                 "dirichlet" => (true, false),
-                other => anyhow::bail!("--mode must be sliding, sliding_only or dirichlet, got `{other}`"),
+                other => return Err(Usage(format!("--mode must be sliding, sliding_only or dirichlet, got `{other}`")).into()),
             };
             let solver = solver_choice(&solver)?;
+            let format = OutputFormat::choose(&out, format.as_deref()).map_err(Usage)?;
+            usage(!same_file(&mesh, &out), || format!("-o `{}` is the input mesh: the curved mesh must go to another file", out.display()))?;
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, ..Default::default() };
             deformesh::io::folder::check_output_file(&out)?;
-            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), options, width: 900 };
+            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), format, options, width: 900 };
             let bar = Bar::new();
             let r = deformesh::app::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
             bar.finish();
@@ -193,13 +242,13 @@ fn run(cli: Cli) -> Result<()> {
                 print!("{text}");
             }
             if invalid > 0 {
-                std::process::exit(2);
+                std::process::exit(exit::INVALID_MESH);
             }
             Ok(())
         }
         Command::Bench { sizes, repeat, dim, solver } => {
             let solver = solver_choice(&solver)?;
-            anyhow::ensure!(dim == 2 || dim == 3, "--dim must be 2 or 3, got {dim}");
+            usage(dim == 2 || dim == 3, || format!("--dim must be 2 or 3, got {dim}"))?;
             println!(
                 "{:>6} {:>10} {:>11} {:>11} {:>11} {:>11} {:>6} {:>12} {:>6} {:>11} {:>11} {:>10}",
                 "cells", "unknowns", "assemble_s", "factor_s", "solve_s", "step_s", "iters", "us/unknown", "cores", "first_s", "setup_s", "peak_MiB"
@@ -229,7 +278,15 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn solver_choice(name: &str) -> Result<SolverChoice> {
-    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| anyhow::anyhow!("--solver must be auto, cholesky, cholesky_cg, cg or amg, got `{name}`"))
+    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| Usage(format!("--solver must be auto, cholesky, cholesky_cg, cg or amg, got `{name}`")).into())
+}
+
+/// Whether two paths name one file (the second need not exist).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
 }
 
 /// An error of a run, prefixed by the input it comes from, except an output

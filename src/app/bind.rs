@@ -81,6 +81,12 @@ impl GeometryFile {
     pub fn parse(text: &str, file: &str) -> Result<GeometryFile, CaseError> {
         let mut g: GeometryFile = toml::from_str(text).map_err(|e| CaseError { file: file.to_string(), message: e.to_string().trim_end().to_string() })?;
         g.source = text.to_string();
+        if g.group.is_empty() {
+            return Err(CaseError {
+                file: file.to_string(),
+                message: "binds no group: `curve` would curve nothing. Add a `[[group]]` table per group to curve (name, kind = \"curve\", shape) or to slide (kind = \"slip\")".into(),
+            });
+        }
         if let Some(t) = g.shape_tolerance {
             if !(t.is_finite() && t > 0.0) {
                 return Err(CaseError { file: file.to_string(), message: format!("shape_tolerance must be a positive number (a fraction of the local edge length), got {t}") });

@@ -63,6 +63,12 @@ pub enum RunError {
     /// A writer failed.
     #[error(transparent)]
     Vtu(#[from] VtuError),
+    /// The MFEM writer refused the mesh.
+    #[error(transparent)]
+    Mfem(#[from] crate::io::mfem::MfemError),
+    /// The ABAQUS writer refused the mesh.
+    #[error(transparent)]
+    Abaqus(#[from] crate::io::abaqus::AbaqusError),
     /// An input file could not be read.
     #[error("cannot read `{}`: {cause}", path.display())]
     Read {
@@ -74,10 +80,40 @@ pub enum RunError {
     /// The output folder cannot take the files.
     #[error(transparent)]
     Folder(#[from] FolderError),
+    /// What the input file holds cannot all be kept in the output.
+    #[error("{0}: nothing was written")]
+    Layout(#[from] crate::io::layout::LayoutError),
+    /// The input holds what `curve` cannot carry to its output (the CLI
+    /// names the file).
+    #[error("{why}")]
+    Unkept {
+        /// The input.
+        path: PathBuf,
+        /// What and what to do.
+        why: String,
+    },
+}
+
+/// The process exit codes, one meaning each (README, `--help`).
+pub mod exit {
+    /// Success: every output written.
+    pub const OK: i32 = 0;
+    /// Bad input: a file, field or argument value the message names.
+    pub const BAD_INPUT: i32 = 1;
+    /// The mesh is, or would become, invalid (the elements are named;
+    /// nothing is written).
+    pub const INVALID_MESH: i32 = 2;
+    /// A linear solve failed (the solver, not the input; nothing written).
+    pub const SOLVER: i32 = 3;
+    /// The command line itself is wrong (unknown option, missing or
+    /// unparsable argument): BSD's EX_USAGE.
+    pub const USAGE: i32 = 64;
+    /// Interrupted by a signal: 128 + its number (130 for Ctrl-C).
+    pub const SIGNAL_BASE: i32 = 128;
 }
 
 impl RunError {
-    /// The process exit code: 2 when the mesh tangles or is invalid, 1 otherwise.
+    /// The process exit code ([`exit`]).
     pub fn exit_code(&self) -> i32 {
         match self {
             RunError::Invalid(_)
@@ -86,8 +122,9 @@ impl RunError {
             | RunError::Deform(DeformError::Tangled { .. })
             | RunError::Deform(DeformError::InvalidStart(_))
             | RunError::Curve(CurveError::InvalidCoarse(_))
-            | RunError::Curve(CurveError::Deform(DeformError::Tangled { .. })) => 2,
-            _ => 1,
+            | RunError::Curve(CurveError::Deform(DeformError::Tangled { .. })) => exit::INVALID_MESH,
+            RunError::Deform(DeformError::Solve(_)) | RunError::Curve(CurveError::Deform(DeformError::Solve(_))) => exit::SOLVER,
+            _ => exit::BAD_INPUT,
         }
     }
 }
@@ -509,13 +546,84 @@ pub struct CurveJob {
     pub input: PathBuf,
     /// The geometry file binding its groups to shapes.
     pub geometry: PathBuf,
-    /// The curved mesh to write (`.msh`); the VTU, PNG and report go
-    /// beside it under the same stem.
+    /// The curved mesh to write; the VTU, PNG and report go beside it
+    /// under the same stem.
     pub output: PathBuf,
+    /// Its format ([`OutputFormat::choose`]).
+    pub format: OutputFormat,
     /// Algorithms 2 and 3.
     pub options: CurveOptions,
     /// Picture width in pixels.
     pub width: u32,
+}
+
+/// The format of the curved mesh `curve` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputFormat {
+    /// Gmsh MSH 4.1 ASCII (`.msh`).
+    Msh41,
+    /// Gmsh MSH 2.2 ASCII (`.msh` with `--format msh22`).
+    Msh22,
+    /// MFEM mesh v1.0 with high-order nodes (`.mesh`).
+    Mfem,
+    /// ABAQUS `.inp` as HOHQMesh writes it for Trixi.jl (`.inp`).
+    Abaqus,
+}
+
+impl OutputFormat {
+    /// The names `--format` takes.
+    pub const NAMES: &'static str = "msh41, msh22, mfem or abaqus";
+
+    /// The format of `output`: by `--format` if given (it must agree with
+    /// the extension), else by the extension: `.msh` MSH 4.1, `.mesh`
+    /// MFEM, `.inp` ABAQUS. Anything else is refused, naming the choices.
+    pub fn choose(output: &Path, flag: Option<&str>) -> Result<OutputFormat, String> {
+        let ext = output.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let by_ext = match ext {
+            "msh" => Some(OutputFormat::Msh41),
+            "mesh" => Some(OutputFormat::Mfem),
+            "inp" => Some(OutputFormat::Abaqus),
+            _ => None,
+        };
+        let by_flag = match flag {
+            None => None,
+            Some("msh41") => Some(OutputFormat::Msh41),
+            Some("msh22") => Some(OutputFormat::Msh22),
+            Some("mfem") => Some(OutputFormat::Mfem),
+            Some("abaqus") => Some(OutputFormat::Abaqus),
+            Some(other) => return Err(format!("--format must be {}, got `{other}`", Self::NAMES)),
+        };
+        let shown = if ext.is_empty() { "no extension".to_string() } else { format!("the extension `.{ext}`") };
+        match (by_flag, by_ext) {
+            (Some(f), Some(e)) if f.extension() != e.extension() => Err(format!("--format {} writes `.{}` files, but -o `{}` has {shown}", f.name(), f.extension(), output.display())),
+            (Some(f), _) if by_ext.is_none() => Err(format!("-o `{}` has {shown}; --format {} writes `.{}` files: name the output so", output.display(), f.name(), f.extension())),
+            (Some(f), _) | (None, Some(f)) => Ok(f),
+            (None, None) => Err(format!(
+                "-o `{}` has {shown}: the extension chooses the format: `.msh` (Gmsh MSH 4.1; MSH 2.2 with --format msh22), `.mesh` (MFEM), `.inp` (ABAQUS for Trixi.jl)",
+                output.display()
+            )),
+        }
+    }
+
+    /// Its `--format` name.
+    pub fn name(self) -> &'static str {
+        match self {
+            OutputFormat::Msh41 => "msh41",
+            OutputFormat::Msh22 => "msh22",
+            OutputFormat::Mfem => "mfem",
+            OutputFormat::Abaqus => "abaqus",
+        }
+    }
+
+    /// The extension of its files.
+    pub fn extension(self) -> &'static str {
+        match self {
+            OutputFormat::Msh41 | OutputFormat::Msh22 => "msh",
+            OutputFormat::Mfem => "mesh",
+            OutputFormat::Abaqus => "inp",
+        }
+    }
 }
 
 /// `<stem>.report.json` of `deformesh curve`.
@@ -534,6 +642,9 @@ pub struct CurveReport {
     pub reoriented_cells: usize,
     /// Validity and geometry of the result.
     pub quality: CurvedQuality,
+    /// The largest move of a new node of a periodic slave onto the image
+    /// of its master (0 without periodic links).
+    pub periodic_snap: f64,
     /// Node spacing.
     pub spacing: Spacing,
     /// Accepted and halved steps of Algorithm 2.
@@ -564,6 +675,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     check_output_file(&job.output)?;
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
     let read = crate::io::msh::parse_any(&bytes, true)?;
+    unkept(&read.layout).map_err(|why| RunError::Unkept { path: job.input.clone(), why })?;
     let geometry = crate::app::bind::GeometryFile::read(&job.geometry)?;
     let gfile = job.geometry.display().to_string();
     // either may relax the check that curved groups lie on their shapes
@@ -576,7 +688,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
             let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
             geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
-            curve_mesh(&mesh, &parts, (unbound, &shared), 0, &job, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3)))
+            curve_mesh(&mesh, &parts, (unbound, &shared), 0, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3)))
         }
         AnyMesh::Quads(mut mesh) => {
             // Gmsh may write a surface's quads clockwise (by its normal)
@@ -584,11 +696,61 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
             let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
             geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
-            curve_mesh(&mesh, &parts, (unbound, &shared), turned, &job, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2)))
+            curve_mesh(&mesh, &parts, (unbound, &shared), turned, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2)))
         }
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
+}
+
+/// The curved mesh in the job's format: the layout (every group, entity,
+/// tag and periodic pair of the input) for the Gmsh formats; for MFEM and
+/// ABAQUS, which know no entities, its cells and boundary elements with
+/// the physical tags as attributes and the group names as boundary names
+/// ([`crate::io::layout::Layout::as_mesh`]).
+fn main_file<const D: usize>(format: OutputFormat, layout: &crate::io::layout::Layout, (mesh, cells, boundary): &(CurvedMesh<D>, Vec<i64>, Vec<i64>)) -> Result<Vec<u8>, RunError> {
+    let text = match format {
+        OutputFormat::Msh41 => crate::io::msh::layout_text(layout),
+        OutputFormat::Msh22 => crate::io::msh::layout_text_22(layout),
+        OutputFormat::Mfem => crate::io::mfem::mfem_string(mesh, cells, boundary)?,
+        OutputFormat::Abaqus => crate::io::abaqus::abaqus_string(mesh)?,
+    };
+    Ok(text.into_bytes())
+}
+
+/// The curved mesh's nodes put where the layout has them (new periodic
+/// nodes at their masters' images), its elements certified again.
+fn recertify<const D: usize>(c: &mut Curved<D>, layout: &crate::io::layout::Layout) -> Result<(), RunError> {
+    for (x, y) in c.mesh.nodes.iter_mut().zip(&layout.coords) {
+        *x = std::array::from_fn(|d| y[d]);
+    }
+    let (certificates, q) = crate::highorder::curve::certify_mesh(&c.mesh).map_err(CurveError::from)?;
+    c.certificates = certificates;
+    c.quality.invalid_elements = q.invalid_elements;
+    c.quality.min_det_j = q.min_det_j;
+    c.quality.min_det_j_attained = q.min_det_j_attained;
+    c.quality.max_det_j = q.max_det_j;
+    c.quality.scaled_jacobian = q.scaled_jacobian;
+    Ok(())
+}
+
+/// Why the output could not keep all that the input file holds, if so:
+/// a partitioned mesh, parametric node coordinates, data sections.
+fn unkept(layout: &crate::io::layout::Layout) -> Result<(), String> {
+    let partitioned = ["PartitionedEntities", "GhostElements"];
+    if let Some(s) = layout.unkept_sections.iter().find(|s| partitioned.contains(&s.as_str())) {
+        return Err(format!(
+            "partitioned mesh: the file has ${s}; `curve` takes the whole mesh: write it unpartitioned \
+             (in Gmsh, save before partitioning, or call `gmsh.model.mesh.unpartition()` before `gmsh.write`)"
+        ));
+    }
+    if let Some(s) = layout.unkept_sections.first() {
+        return Err(format!("the file has a ${s} section, which `curve` cannot carry to the curved mesh (it writes the mesh only): save the mesh without it"));
+    }
+    if layout.parametric {
+        return Err("the file gives parametric node coordinates, which `curve` cannot give its new nodes: save it without them (Gmsh: Mesh.SaveParametric = 0)".into());
+    }
+    Ok(())
 }
 
 /// A boundary element of an entity in several physical groups is read
@@ -679,11 +841,19 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
     parts: &[BoundaryPart<D>],
     (unbound, shared): (Vec<String>, &[(usize, usize)]),
     reoriented: usize,
-    job: &CurveJob,
+    (job, input): (&CurveJob, &crate::io::layout::Layout),
     progress: &mut dyn FnMut(Progress),
 ) -> Result<CurveReport, RunError> {
     let clock = Instant::now();
     let mut c = mesh.curve(parts, &job.options, progress)?;
+    // files store equispaced nodes (the same maps: certificates hold);
+    // the node numbering stays
+    let spacing = c.mesh.spacing;
+    c.mesh = c.mesh.to_equispaced();
+    let (layout, snapped) = input.curved(&c.mesh, &c.coarse_nodes)?;
+    if snapped > 0.0 {
+        recertify(&mut c, &layout)?;
+    }
     // elements of an entity in several groups go into each of them
     for &(k, part) in shared {
         let nodes = c.mesh.boundary[k].nodes.clone();
@@ -708,13 +878,15 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         colour_map: Some(ColourMap::Sequential),
         output: &output,
     };
+    // the cells in the readers' order, as c.mesh has them
+    let view = layout.as_mesh::<D>();
     // the three outputs are independent and each mostly serial: side by side
-    let ((msh, vtu), png) = rayon::join(
-        || rayon::join(|| c.mesh.msh_string(), || c.mesh.vtu_string(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])),
+    let ((main, vtu), png) = rayon::join(
+        || rayon::join(|| main_file(job.format, &layout, &view), || c.mesh.vtu_string_with_attributes(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)], &view.1)),
         || -> Result<Vec<u8>, RunError> { Ok(png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?) },
     );
-    let mut files: Vec<(String, Vec<u8>)> =
-        vec![(format!("{stem}.msh"), msh?.into_bytes()), (format!("{stem}.vtu"), vtu?.into_bytes()), (format!("{stem}.png"), png?)];
+    let name = job.output.file_name().map_or_else(|| format!("{stem}.{}", job.format.extension()), |n| n.to_string_lossy().into_owned());
+    let mut files: Vec<(String, Vec<u8>)> = vec![(name, main?), (format!("{stem}.vtu"), vtu?.into_bytes()), (format!("{stem}.png"), png?)];
     let mut report = CurveReport {
         input: job.input.display().to_string(),
         dimension: D,
@@ -722,7 +894,8 @@ fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
         unbound_groups: unbound,
         reoriented_cells: reoriented,
         quality: c.quality.clone(),
-        spacing: c.mesh.spacing,
+        periodic_snap: snapped,
+        spacing,
         steps: c.stats.steps,
         halved_steps: c.stats.halved,
         algorithm2_runs: c.attempts,

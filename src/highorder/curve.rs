@@ -428,6 +428,10 @@ pub struct Curved<const D: usize> {
     pub solver: crate::deform::SolverReport,
     /// Seconds spent in Algorithm 2, in certification.
     pub seconds: (f64, f64),
+    /// The node of `mesh` at each node of the linear mesh (`usize::MAX`
+    /// for a node in no cell), so that what a file said of its nodes can
+    /// be carried over.
+    pub coarse_nodes: Vec<usize>,
 }
 
 /// Certifies every element; returns the certificates and the summary
@@ -600,7 +604,8 @@ where
     quality.boundary_node_distance = quality.boundary_error.values().map(|e| e.nodes).fold(moved_distance, f64::max);
     quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
-    Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds: (alg2, certify_s + clock.elapsed().as_secs_f64()) })
+    let seconds = (alg2, certify_s + clock.elapsed().as_secs_f64());
+    Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds, coarse_nodes: sub.coarse_nodes.clone() })
 }
 
 /// Whether `auto`, which would pick the multigrid for this many unknowns,

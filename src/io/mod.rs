@@ -1,5 +1,7 @@
-//! Reading and writing meshes: Gmsh MSH 4.1 ([`msh`]) and VTK XML
-//! unstructured grids ([`vtu`]), for meshes of any order.
+//! Reading and writing meshes: what a file holds besides the cells
+//! ([`layout`]), Gmsh MSH 4.1 and 2.2 ([`msh`]), MFEM mesh v1.0
+//! ([`mfem`]), ABAQUS as HOHQMesh writes it for Trixi.jl ([`abaqus`]) and
+//! VTK XML unstructured grids ([`vtu`]), for meshes of any order.
 
 /// Appends one formatted line to a `String`. Formatting into a `String`
 /// cannot fail, so the `fmt::Result` is dropped here once for all writers.
@@ -9,7 +11,10 @@ macro_rules! put {
     };
 }
 
+pub mod abaqus;
 pub mod folder;
+pub mod layout;
+pub mod mfem;
 pub mod msh;
 pub mod vtu;
 

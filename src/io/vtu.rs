@@ -110,6 +110,28 @@ impl<const D: usize> CurvedMesh<D> {
         grid_string(self, cell_data, &[])
     }
 
+    /// [`CurvedMesh::vtu_string`] plus one integer attribute per cell, the
+    /// [`ATTRIBUTE_ARRAY`] MFEM's VTU reader takes its element attributes
+    /// from ([`grid_string_with_attributes`]).
+    pub fn vtu_string_with_attributes(
+        &self,
+        cell_data: &[(&str, &[f64])],
+        attributes: &[i64],
+    ) -> Result<String, VtuError> {
+        grid_string_with_attributes(self, cell_data, &[], attributes)
+    }
+
+    /// Writes [`CurvedMesh::vtu_string_with_attributes`] atomically to
+    /// `path`; nothing is written if the input is rejected.
+    pub fn write_vtu_with_attributes(
+        &self,
+        path: &Path,
+        cell_data: &[(&str, &[f64])],
+        attributes: &[i64],
+    ) -> Result<(), VtuError> {
+        write_text(path, &self.vtu_string_with_attributes(cell_data, attributes)?)
+    }
+
     /// Writes [`CurvedMesh::vtu_string`] atomically to `path`; nothing is
     /// written if the input is rejected.
     pub fn write_vtu(&self, path: &Path, cell_data: &[(&str, &[f64])]) -> Result<(), VtuError> {
@@ -143,7 +165,39 @@ pub fn grid_string<const D: usize>(
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; D]])],
 ) -> Result<String, VtuError> {
+    grid_text(mesh, cell_data, point_vectors, None)
+}
+
+/// [`grid_string`] plus an Int32 CellData array [`ATTRIBUTE_ARRAY`] with
+/// one attribute per cell, in `1..=i32::MAX` (MFEM's attributes are
+/// positive `int`s). MFEM's XML VTK reader takes the first array of the
+/// `CellData` element marked `Scalars="attribute"` as the element
+/// attributes, so the attributes come first there, before `cell_data`.
+/// Fails as [`grid_string`], and on a wrong number of attributes, values
+/// outside that range and a `cell_data` array of the same name.
+pub fn grid_string_with_attributes<const D: usize>(
+    mesh: &CurvedMesh<D>,
+    cell_data: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; D]])],
+    attributes: &[i64],
+) -> Result<String, VtuError> {
+    grid_text(mesh, cell_data, point_vectors, Some(attributes))
+}
+
+/// The name of the attribute array of [`grid_string_with_attributes`].
+pub const ATTRIBUTE_ARRAY: &str = "attribute";
+
+/// [`grid_string`], with the attribute array if `attributes` is given.
+fn grid_text<const D: usize>(
+    mesh: &CurvedMesh<D>,
+    cell_data: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; D]])],
+    attributes: Option<&[i64]>,
+) -> Result<String, VtuError> {
     validate(mesh, cell_data, point_vectors)?;
+    if let Some(a) = attributes {
+        check_attributes(mesh.cells.len(), cell_data, a)?;
+    }
     let resampled;
     let mesh = if mesh.spacing == Spacing::Equispaced {
         mesh
@@ -159,7 +213,7 @@ pub fn grid_string<const D: usize>(
     out.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"2.2\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n");
     put!(out, "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", mesh.nodes.len(), mesh.cells.len());
     push_point_data(&mut out, point_vectors);
-    push_cell_data(&mut out, cell_data);
+    push_cell_data(&mut out, cell_data, attributes);
     put!(out, "<Points>\n{}", float_array_tag(None, 3));
     for x in &mesh.nodes {
         push_vec3(&mut out, x);
@@ -315,9 +369,34 @@ fn push_point_data<const D: usize>(out: &mut String, point_vectors: &[(&str, &[[
     out.push_str("</PointData>\n");
 }
 
-/// CellData: one scalar array per field.
-fn push_cell_data(out: &mut String, cell_data: &[(&str, &[f64])]) {
-    out.push_str("<CellData>\n");
+/// Fails unless there is one attribute per cell, each in `1..=i32::MAX`,
+/// and no `cell_data` array takes the attribute array's name.
+fn check_attributes(cells: usize, cell_data: &[(&str, &[f64])], attributes: &[i64]) -> Result<(), VtuError> {
+    check_length("cell attributes", cells, attributes.len())?;
+    if let Some(i) = attributes.iter().position(|&a| !(1..=i64::from(i32::MAX)).contains(&a)) {
+        return Err(VtuError::Invalid(format!(
+            "cell {i} has attribute {}; attributes must be in 1..={}",
+            attributes[i],
+            i32::MAX
+        )));
+    }
+    check_names(cell_data.iter().map(|a| a.0).chain([ATTRIBUTE_ARRAY]))
+}
+
+/// CellData: the attributes if given (first, and named as the active
+/// scalars, which is where MFEM looks), then one scalar array per field.
+fn push_cell_data(out: &mut String, cell_data: &[(&str, &[f64])], attributes: Option<&[i64]>) {
+    match attributes {
+        None => out.push_str("<CellData>\n"),
+        Some(a) => {
+            put!(out, "<CellData Scalars=\"{ATTRIBUTE_ARRAY}\">");
+            put!(out, "<DataArray type=\"Int32\" Name=\"{ATTRIBUTE_ARRAY}\" format=\"ascii\">");
+            for v in a {
+                put!(out, "{v}");
+            }
+            out.push_str("</DataArray>\n");
+        }
+    }
     for (name, values) in cell_data {
         put!(out, "{}", float_array_tag(Some(name), 1));
         for v in *values {
@@ -496,5 +575,37 @@ mod tests {
         assert!(text.contains("<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n70\n"));
         // VTK reads files older than 2.2 with VTK 8's hex edge order
         assert!(text.contains("version=\"2.2\""));
+    }
+
+    #[test]
+    fn attributes_come_first_as_the_active_cell_scalars() {
+        let m = CurvedMesh::<2>::structured(2, Spacing::Equispaced, [2, 1], bend2).unwrap();
+        let q = [0.5, 0.25];
+        let text = m.vtu_string_with_attributes(&[("quality", &q)], &[6, 7]).unwrap();
+        assert!(text.contains(
+            "<CellData Scalars=\"attribute\">\n<DataArray type=\"Int32\" Name=\"attribute\" format=\"ascii\">\n6\n7\n</DataArray>\n<DataArray type=\"Float64\" Name=\"quality\""
+        ), "{text}");
+        // without attributes the file is what it was
+        assert_eq!(
+            m.vtu_string(&[("quality", &q)]).unwrap(),
+            text.replace("<CellData Scalars=\"attribute\">\n<DataArray type=\"Int32\" Name=\"attribute\" format=\"ascii\">\n6\n7\n</DataArray>\n", "<CellData>\n")
+        );
+        assert!(matches!(
+            m.vtu_string_with_attributes(&[], &[1]),
+            Err(VtuError::Length { expected: 2, found: 1, .. })
+        ));
+        let err = m.vtu_string_with_attributes(&[], &[1, 0]).unwrap_err();
+        assert!(err.to_string().contains("cell 1 has attribute 0"), "{err}");
+        assert!(m.vtu_string_with_attributes(&[], &[1, 1 << 31]).is_err());
+        assert!(matches!(
+            m.vtu_string_with_attributes(&[("attribute", &q)], &[1, 2]),
+            Err(VtuError::Invalid(_))
+        ));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.vtu");
+        assert!(m.write_vtu_with_attributes(&path, &[], &[0, 1]).is_err());
+        assert!(!path.exists());
+        m.write_vtu_with_attributes(&path, &[], &[3, 4]).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), m.vtu_string_with_attributes(&[], &[3, 4]).unwrap());
     }
 }

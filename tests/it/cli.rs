@@ -422,10 +422,64 @@ fn curve_bad_arguments_are_clean_errors() {
     assert!(ran.stderr.contains("geo.toml") && ran.stderr.contains("no boundary group `hull`"), "{}", ran.stderr);
     for (flag, value, needle) in [("--order", "5", "order 5 is not supported"), ("--spacing", "chebyshev", "--spacing must be"), ("--mode", "glide", "--mode must be")] {
         let ran = deformesh(dir.path(), &["curve", path_str(&cyl), "--geometry", "geo.toml", flag, value, "-o", "out/cyl.msh"]);
-        assert_eq!(ran.code, Some(1), "{flag}");
+        assert_eq!(ran.code, Some(64), "{flag}: a usage error");
         assert!(ran.stderr.contains(needle) && !ran.stderr.contains("panicked"), "{}", ran.stderr);
     }
     assert!(!dir.path().join("out").exists());
+}
+
+#[test]
+fn each_exit_code_means_one_thing() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("geo.toml"), WALL).unwrap();
+    let cyl = cylinder();
+    let curve = |extra: &[&str]| {
+        let mut args = vec!["curve", path_str(&cyl)];
+        args.extend_from_slice(extra);
+        deformesh(dir.path(), &args)
+    };
+    // clap's own errors are usage errors (64), not an invalid mesh (2)
+    for (args, needle) in [
+        (&["--geometry", "geo.toml", "--order", "-1", "-o", "out/c.msh"][..], "unexpected argument '-1'"),
+        (&["--order", "2", "-o", "out/c.msh"][..], "--geometry"),
+        (&["--geometry", "geo.toml", "--colour", "red", "-o", "out/c.msh"][..], "--colour"),
+    ] {
+        let ran = curve(args);
+        assert_eq!(ran.code, Some(64), "{args:?}: {}", ran.stderr);
+        assert!(ran.stderr.contains(needle), "{}", ran.stderr);
+    }
+    // the output: an extension that names a format, not the input itself
+    for (out, format, needle) in [
+        ("out/c", None, "has no extension: the extension chooses the format"),
+        ("out/c.vtk", None, "the extension `.vtk`"),
+        ("out/c.msh", Some("mfem"), "--format mfem writes `.mesh` files"),
+        ("out/c.msh", Some("stl"), "--format must be msh41, msh22, mfem or abaqus"),
+    ] {
+        let mut args = vec!["--geometry", "geo.toml", "--order", "2", "-o", out];
+        if let Some(f) = format {
+            args.extend_from_slice(&["--format", f]);
+        }
+        let ran = curve(&args);
+        assert_eq!(ran.code, Some(64), "{out} {format:?}: {}", ran.stderr);
+        assert!(ran.stderr.contains(needle), "{}", ran.stderr);
+    }
+    // the input itself, by another spelling of its path (a copy: the
+    // suite's data must survive a failing check)
+    std::fs::copy(&cyl, dir.path().join("in.msh")).unwrap();
+    let ran = deformesh(dir.path(), &["curve", "in.msh", "--geometry", "geo.toml", "-o", "./in.msh"]);
+    assert_eq!(ran.code, Some(64), "{}", ran.stderr);
+    assert!(ran.stderr.contains("is the input mesh"), "{}", ran.stderr);
+    assert_eq!(std::fs::read(dir.path().join("in.msh")).unwrap(), std::fs::read(&cyl).unwrap(), "the input is untouched");
+    // a geometry file that binds nothing is bad input (1), named
+    std::fs::write(dir.path().join("empty.toml"), "# nothing\n").unwrap();
+    let ran = curve(&["--geometry", "empty.toml", "--order", "2", "-o", "out/c.msh"]);
+    assert_eq!(ran.code, Some(1), "{}", ran.stderr);
+    assert!(ran.stderr.contains("empty.toml") && ran.stderr.contains("binds no group"), "{}", ran.stderr);
+    assert!(!dir.path().join("out").exists(), "nothing written");
+    // help and version succeed and list the codes
+    let help = deformesh(dir.path(), &["--help"]);
+    assert_eq!(help.code, Some(0));
+    assert!(help.stdout.contains("Exit codes: 0 success; 1 bad input") && help.stdout.contains("64 a usage error"), "{}", help.stdout);
 }
 
 // ------------------------------------------------------------ the output folder

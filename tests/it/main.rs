@@ -6,12 +6,16 @@
 #[allow(dead_code)]
 mod common;
 
+mod abaqus;
 mod adaptation;
 mod cli;
 mod curve_import;
 mod deformation;
 mod deformation3d;
 mod highorder;
+mod kept;
+mod mfem;
+mod msh22;
 mod real_programs;
 mod real_programs_hex;
 mod real_programs_highorder;

@@ -8,11 +8,12 @@
 //! entities in none of them; an entity in several groups puts its elements
 //! in each.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use super::read::{Accept, Block, Raw};
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::mesh::element::{from_format, gmsh_hex_order, gmsh_line_order, gmsh_quad_order, Spacing};
+use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName, Shape};
 use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, HexMesh, QuadMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
@@ -22,6 +23,49 @@ type Element<'a> = (u64, &'a Block, &'a [usize]);
 type Facet<'a> = (&'a [usize], usize, &'a Block);
 
 impl Raw {
+    /// Everything the file says, as a [`Layout`] (element nodes in
+    /// tensor order). Entities named by node or element blocks but not
+    /// in `$Entities` (a file without it) are added without groups.
+    pub fn layout(&self) -> Layout {
+        let mut entities = self.entities.clone();
+        let mut known: HashSet<(usize, i64)> = entities.iter().map(|e| (e.dim, e.tag)).collect();
+        let used = self.node_entity.iter().copied().chain(self.blocks.iter().map(|b| (b.kind.dim, b.entity)));
+        for (dim, tag) in used {
+            if known.insert((dim, tag)) {
+                entities.push(Entity { dim, tag, bbox: [0.0; 6], physicals: Vec::new(), bounding: Vec::new() });
+            }
+        }
+        let elements = self.blocks.iter().flat_map(|b| {
+            let perm = tensor_perm(b.kind.dim, b.kind.order);
+            b.tags.iter().zip(b.nodes.chunks(b.kind.nodes)).map(move |(&tag, nodes)| layout::Element {
+                tag,
+                entity: b.entity,
+                shape: Shape::of_dim(b.kind.dim),
+                order: b.kind.order,
+                nodes: from_format(&perm, nodes),
+            })
+        });
+        let index = |t: &u64| self.node_index[t];
+        let periodic = self.periodic.iter().map(|l| Periodic {
+            dim: l.dim,
+            slave: l.slave,
+            master: l.master,
+            affine: l.affine.clone(),
+            pairs: l.pairs.iter().map(|(s, m)| (index(s), index(m))).collect(),
+        });
+        Layout {
+            physical_names: self.physical_names.iter().map(|(d, t, n)| PhysicalName { dim: *d as usize, tag: *t, name: n.clone() }).collect(),
+            entities,
+            coords: self.nodes.clone(),
+            node_tags: self.node_tags.clone(),
+            node_entity: self.node_entity.clone(),
+            elements: elements.collect(),
+            periodic: periodic.collect(),
+            unkept_sections: self.skipped.clone(),
+            parametric: self.parametric,
+        }
+    }
+
     /// The linear quad mesh (z must be 0) and its cells' element tags.
     pub fn quad_mesh(&self) -> Result<(QuadMesh, Vec<u64>), MshError> {
         self.check(LINEAR[0])?;
@@ -154,5 +198,17 @@ impl Raw {
             entity_parts.insert(entity, parts);
         }
         (names, entity_parts)
+    }
+}
+
+/// Gmsh's local order of a tensor element of dimension `dim` and order
+/// `p` (identity for a point).
+pub(super) fn tensor_perm(dim: usize, p: usize) -> Vec<usize> {
+    let ok = "orders 1..=4 from the type table";
+    match dim {
+        0 => vec![0],
+        1 => gmsh_line_order(p).expect(ok),
+        2 => gmsh_quad_order(p).expect(ok),
+        _ => gmsh_hex_order(p).expect(ok),
     }
 }

@@ -1,6 +1,8 @@
 //! Gmsh MSH 4.1 files of quad and hex meshes of any order: one reader for
 //! ASCII and binary files (`read`), meshes made of what it read
-//! (`build`), and one writer ([`write`]).
+//! (`build`), and one writer ([`write`]). ASCII MSH 2.2 (and 2.0, 2.1) is
+//! read into the same items and written from a layout
+//! ([`layout_text_22`], module `v22`); every reader below takes it.
 //!
 //! Layout written: every boundary part becomes an entity of the boundary
 //! dimension (a curve in 2D, a surface in 3D) carrying a physical group of
@@ -15,6 +17,7 @@
 
 mod build;
 mod read;
+mod v22;
 mod write;
 
 use std::fmt;
@@ -22,14 +25,13 @@ use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
-pub use write::{hex_msh_string, msh_string, write_hex_msh, write_msh};
+pub use v22::layout_text_22;
+pub use write::{hex_msh_string, layout_text, msh_string, msh_type, write_hex_msh, write_msh};
 
 use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
 use read::Accept;
 
-/// Name of the physical group that holds all cells (dimension 2 for quad
-/// meshes, 3 for hex meshes).
-pub const DOMAIN_NAME: &str = "domain";
+pub use crate::io::layout::DOMAIN_NAME;
 
 /// MSH element types of lines of order 1..=4 (index `p − 1`).
 pub const MSH_LINE_TYPES: [i64; 4] = [1, 8, 26, 27];
@@ -105,13 +107,36 @@ pub enum MshError {
         /// The item found.
         found: String,
     },
-    /// A version other than 4.1 (e.g. MSH 2.2).
+    /// A version other than 4.1 and 2.x (e.g. MSH 3 or 4.0).
     #[error("{at}: MSH version {} is not supported: {RESAVE_HINT}", shown(version, ""))]
     UnsupportedVersion {
         /// Where the version number is.
         at: Pos,
         /// The version found.
         version: String,
+    },
+    /// A binary MSH 2 file (only ASCII MSH 2 is read).
+    #[error(
+        "{at}: binary MSH {} is not supported: save the mesh as ASCII MSH 2.2 or as MSH 4.1 (ASCII or binary), \
+         e.g. `gmsh IN.msh -save -format msh22 -o OUT.msh` (ASCII unless `-bin`) or `-format msh41`",
+        shown(version, "")
+    )]
+    BinaryV2 {
+        /// Where the file type is.
+        at: Pos,
+        /// The version found.
+        version: String,
+    },
+    /// One element tag on two different elements (MSH 2: copies of one
+    /// element, one per physical group, are one element).
+    #[error("{at}: element tag {tag} is used by two different elements (the first at {first}): element tags must be unique")]
+    DuplicateElement {
+        /// Where the second element is.
+        at: Pos,
+        /// The tag.
+        tag: u64,
+        /// Where the first is.
+        first: Pos,
     },
     /// A section header announced another number of items than it holds.
     #[error("{at}: {what}: the header says {expected}, the blocks hold {found}")]
@@ -200,17 +225,35 @@ fn shown(token: &str, quote: &str) -> String {
     }
 }
 
-/// For triangles, tetrahedra, prisms and pyramids: what to do instead.
-/// Gmsh makes them by default, so this is the usual first failure.
-fn recombine_hint(element_type: i64) -> &'static str {
+/// What to do instead of an element type the reader refuses: for
+/// triangles, tetrahedra, prisms and pyramids (Gmsh makes them by default,
+/// so this is the usual first failure), and for elements of order > 1
+/// (`curve` places the high-order nodes itself).
+fn recombine_hint(element_type: i64) -> String {
+    let high_order = match element_type {
+        8 | 26 | 27 => Some(("line", [8, 26, 27].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
+        10 | 36 | 37 => Some(("quad", [10, 36, 37].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
+        12 | 92 | 93 => Some(("hexahedron", [12, 92, 93].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
+        16 => Some(("serendipity quad", 2)),
+        17 => Some(("serendipity hexahedron", 2)),
+        _ => None,
+    };
+    if let Some((shape, p)) = high_order {
+        return format!(
+            ". Type {element_type} is a {shape} of order {p}: `curve` takes the linear mesh and places the high-order nodes itself \
+             (onto the exact shapes, certified). Give it the mesh at order 1: in Gmsh, `gmsh.model.mesh.setOrder(1)` before `gmsh.write` \
+             (or `Mesh.ElementOrder = 1;` in the .geo file); `deformesh quality` reads and certifies meshes of order 1 to 4 as they are"
+        );
+    }
     match element_type {
         2 | 9 | 20..=25 | 4 | 11 | 29..=33 | 6 | 13 | 18 | 7 | 14 | 19 => {
             ". Triangles, tetrahedra, prisms and pyramids are not supported yet: deformesh takes quad and hex meshes. \
              In Gmsh, recombine: for all quads put `Mesh.RecombineAll = 1;` and `Mesh.SubdivisionAlgorithm = 1;` in the .geo file \
              (or pass `-setnumber Mesh.RecombineAll 1 -setnumber Mesh.SubdivisionAlgorithm 1`), \
              for all hexes `Mesh.SubdivisionAlgorithm = 2;` (or extrude a quad mesh with `Recombine`); see the README"
+                .into()
         }
-        _ => "",
+        _ => String::new(),
     }
 }
 
@@ -306,6 +349,8 @@ pub struct Tagged {
     pub cell_tags: Vec<u64>,
     /// Node `i` is node `node_tags[i]` of the file.
     pub node_tags: Vec<u64>,
+    /// Everything else the file says (groups, entities, periodicity).
+    pub layout: crate::io::layout::Layout,
 }
 
 /// Parses an MSH 4.1 file (ASCII or binary) into the mesh it holds: the
@@ -321,8 +366,10 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
         (_, 1) => raw.quad_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,
         _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved2(m), t))?,
     };
-    Ok(Tagged { mesh, cell_tags, node_tags: raw.node_tags })
+    Ok(Tagged { mesh, cell_tags, layout: raw.layout(), node_tags: raw.node_tags })
 }
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests22;

@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::str::FromStr;
 
 use super::{syntax, MshError, Pos, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES};
+use crate::io::layout::Entity;
 
 /// What an element type is: its dimension, order and number of nodes.
 #[derive(Clone, Copy, Debug)]
@@ -71,10 +72,20 @@ pub(super) struct Raw {
     pub physical_names: Vec<(i64, i64, String)>,
     /// Physical tags of each `(dimension, tag)` entity.
     pub entity_physicals: HashMap<(usize, i64), Vec<i64>>,
+    /// Every entity of `$Entities`, in file order.
+    pub entities: Vec<Entity>,
+    /// `(dimension, tag)` of the entity of each node's block.
+    pub node_entity: Vec<(usize, i64)>,
+    /// `$Periodic` links, their pairs as node tags of the file.
+    pub periodic: Vec<PeriodicTags>,
+    /// Sections skipped, by name (`NodeData`, …).
+    pub skipped: Vec<String>,
+    /// Whether a node block gave parametric coordinates.
+    pub parametric: bool,
     /// The file's node tags, in file order (node `i` is `node_tags[i]`).
     pub node_tags: Vec<u64>,
     /// Node tag → index into `nodes`.
-    node_index: HashMap<u64, usize>,
+    pub node_index: HashMap<u64, usize>,
     /// Node coordinates, z included.
     pub nodes: Vec<[f64; 3]>,
     /// `(position, tag, z)` of the first node off the plane z = 0.
@@ -87,11 +98,27 @@ pub(super) struct Raw {
     pub elements_at: Option<Pos>,
 }
 
+/// A `$Periodic` link as the file gives it.
+pub(super) struct PeriodicTags {
+    /// Dimension of both entities.
+    pub dim: usize,
+    /// The slave entity.
+    pub slave: i64,
+    /// Its master.
+    pub master: i64,
+    /// The affine map (16 values) or nothing.
+    pub affine: Vec<f64>,
+    /// `(slave node tag, master node tag)`.
+    pub pairs: Vec<(u64, u64)>,
+}
+
 /// Reads every section of an MSH 4.1 file; element types other than the
 /// `accept`ed ones are an error at their block header.
 pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
     let mut r = Reader { bytes, pos: 0, line: 1, binary: None };
-    r.mesh_format()?;
+    if r.mesh_format()? == Version::V2 {
+        return super::v22::parse(bytes, accept);
+    }
     let mut raw = Raw::default();
     while let Some((word, at)) = r.word() {
         match word {
@@ -99,7 +126,11 @@ pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
             b"$Entities" => entities(r.data(), &mut raw)?,
             b"$Nodes" => nodes(r.data(), &mut raw)?,
             b"$Elements" => elements(r.data(), &mut raw, accept)?,
-            w if w.starts_with(b"$") && !w.starts_with(b"$End") => r.skip_section(&w[1..])?,
+            b"$Periodic" => periodic(r.data(), &mut raw)?,
+            w if w.starts_with(b"$") && !w.starts_with(b"$End") => {
+                raw.skipped.push(lossy(&w[1..]));
+                r.skip_section(&w[1..])?
+            }
             w => return Err(syntax(at, "a section header like `$Nodes`", &lossy(w))),
         }
     }
@@ -126,8 +157,7 @@ fn physical_names(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
 
 /// `$Entities`: counts of points, curves, surfaces, volumes, then each
 /// entity: tag, a point (3) or a bounding box (6), its physical tags and,
-/// above points, its signed bounding entities. Only the physical tags
-/// are kept: they name the boundary parts.
+/// above points, its signed bounding entities.
 fn entities(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
     let mut counts = [0u64; 4];
     for (dim, c) in counts.iter_mut().enumerate() {
@@ -136,14 +166,17 @@ fn entities(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
     for (dim, &count) in counts.iter().enumerate() {
         for _ in 0..count {
             let tag = r.int(&format!("a dimension-{dim} entity tag"))?.0;
-            for _ in 0..if dim == 0 { 3 } else { 6 } {
-                r.float("an entity coordinate")?;
+            let mut bbox = [0.0; 6];
+            for c in bbox.iter_mut().take(if dim == 0 { 3 } else { 6 }) {
+                *c = r.float("an entity coordinate")?.0;
+            }
+            if dim == 0 {
+                bbox.copy_within(0..3, 3);
             }
             let physicals = tag_list(r, "physical tags")?;
-            if dim > 0 {
-                tag_list(r, "bounding entity tags")?;
-            }
-            raw.entity_physicals.insert((dim, tag), physicals);
+            let bounding = if dim > 0 { tag_list(r, "bounding entity tags")? } else { Vec::new() };
+            raw.entity_physicals.insert((dim, tag), physicals.clone());
+            raw.entities.push(Entity { dim, tag, bbox, physicals, bounding });
         }
     }
     r.expect("$EndEntities")
@@ -188,7 +221,7 @@ fn node_block(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
     if !(0..=3).contains(&dim) {
         return Err(syntax(at, "an entity dimension 0..3", &dim.to_string()));
     }
-    r.int("a node block entity tag")?;
+    let entity = r.int("a node block entity tag")?.0;
     let (parametric, at) = r.int("the parametric flag")?;
     if !(0..=1).contains(&parametric) {
         return Err(syntax(at, "parametric flag 0 or 1", &parametric.to_string()));
@@ -201,7 +234,9 @@ fn node_block(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
             return Err(MshError::DuplicateNode { at, tag });
         }
         raw.node_tags.push(tag);
+        raw.node_entity.push((dim as usize, entity));
     }
+    raw.parametric |= parametric == 1;
     for i in first..raw.node_tags.len() {
         let tag = raw.node_tags[i];
         let mut x = [0.0; 3];
@@ -241,6 +276,40 @@ fn elements(r: &mut Reader, raw: &mut Raw, accept: Accept) -> Result<(), MshErro
     r.expect("$EndElements")
 }
 
+/// `$Periodic`: the number of links, then per link `dim tag masterTag`,
+/// the number of affine values (0 or 16) and the values, the number of
+/// node pairs and the pairs of node tags.
+fn periodic(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
+    let links = r.size("the number of periodic links")?.0;
+    for _ in 0..links {
+        let (dim, at) = r.int("a periodic entity dimension")?;
+        if !(0..=3).contains(&dim) {
+            return Err(syntax(at, "an entity dimension 0..3", &dim.to_string()));
+        }
+        let slave = r.int("a periodic entity tag")?.0;
+        let master = r.int("a periodic master entity tag")?.0;
+        let (count, at) = r.size("the number of affine values")?;
+        if count != 0 && count != 16 {
+            return Err(syntax(at, "0 or 16 affine values", &count.to_string()));
+        }
+        let affine = (0..count).map(|_| r.float("an affine value").map(|v| v.0)).collect::<Result<Vec<f64>, _>>()?;
+        let pairs_count = r.size("the number of periodic node pairs")?.0;
+        let mut pairs = Vec::new();
+        for _ in 0..pairs_count {
+            let (s, at) = r.size("a periodic node tag")?;
+            let m = r.size("a periodic master node tag")?.0;
+            for tag in [s, m] {
+                if !raw.node_index.contains_key(&tag) {
+                    return Err(syntax(at, "the tag of a node of $Nodes (periodic node pair)", &tag.to_string()));
+                }
+            }
+            pairs.push((s, m));
+        }
+        raw.periodic.push(PeriodicTags { dim: dim as usize, slave, master, affine, pairs });
+    }
+    r.expect("$EndPeriodic")
+}
+
 /// One element block `dim entity type count` and its elements (`tag`, then
 /// the node tags); returns the number of elements. The type fixes the
 /// number of nodes, so an unknown type cannot even be skipped.
@@ -271,6 +340,13 @@ fn lossy(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
+/// The MSH versions read: 4.1 here, 2.x by [`super::v22`].
+#[derive(PartialEq)]
+enum Version {
+    V41,
+    V2,
+}
+
 /// The file's items in order: text tokens with their lines, or, in the
 /// data of a binary file, numbers of fixed size at byte offsets.
 struct Reader<'a> {
@@ -285,9 +361,13 @@ struct Reader<'a> {
 impl<'a> Reader<'a> {
     /// `$MeshFormat`: version 4.1, ASCII (0) or binary (1) with 8-byte
     /// `size_t`, whose byte order the integer 1 that follows tells.
-    fn mesh_format(&mut self) -> Result<(), MshError> {
+    /// MSH 2.x is left to [`super::v22`] right after the version.
+    fn mesh_format(&mut self) -> Result<Version, MshError> {
         self.expect("$MeshFormat")?;
         let (version, at) = self.token("the MSH version number")?;
+        if super::v22::is_version(version) {
+            return Ok(Version::V2);
+        }
         if version != b"4.1" {
             return Err(MshError::UnsupportedVersion { at, version: lossy(version) });
         }
@@ -307,7 +387,8 @@ impl<'a> Reader<'a> {
             b"1" => return Err(syntax(at, "data size 8 in a binary file", &size.to_string())),
             s => return Err(syntax(type_at, "file type 0 (ASCII) or 1 (binary)", &lossy(s))),
         }
-        self.expect("$EndMeshFormat")
+        self.expect("$EndMeshFormat")?;
+        Ok(Version::V41)
     }
 
     /// After a section header of a binary file, its data start on the

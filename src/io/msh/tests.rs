@@ -180,7 +180,7 @@ fn assert_rejected(from: &str, to: &str, words: &[&str]) {
 
 #[test]
 fn rejects_old_formats_and_bad_binary_data() {
-    assert_rejected("4.1 0 8", "2.2 0 8", &["version 2.2", "-format msh41"]);
+    assert_rejected("4.1 0 8", "3.0 0 8", &["version 3.0", "-format msh41"]);
     assert_rejected("4.1 0 8", "4 0 8", &["version 4 "]);
     assert_rejected("4.1 0 8", "4.1 1 4", &["data size 8"]);
     assert_rejected("4.1 0 8", "4.1 2 8", &["file type 0 (ASCII) or 1 (binary)"]);
@@ -491,7 +491,7 @@ fn bad_meshes_and_files_are_rejected() {
     ));
     let text = m.msh_string().unwrap().replace("\n1 1 8 ", "\n1 1 1 ");
     assert!(CurvedMesh::<2>::parse_msh(&text).is_err());
-    let text = m.msh_string().unwrap().replace("4.1 0 8", "2.2 0 8");
+    let text = m.msh_string().unwrap().replace("4.1 0 8", "3.0 0 8");
     assert!(matches!(
         CurvedMesh::<2>::parse_msh(&text),
         Err(MshError::UnsupportedVersion { .. })

@@ -1,12 +1,15 @@
 //! The one MSH writer: meshes of any order, linear ones as order 1
 //! (layout in the [module docs](super)).
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{MshError, DOMAIN_NAME, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES};
+use super::build::tensor_perm;
+use super::{MshError, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES};
 use crate::io::fmt_f64;
-use crate::mesh::element::{gmsh_hex_order, gmsh_line_order, gmsh_quad_order, to_format, Spacing};
+use crate::io::layout::{Layout, Shape};
+use crate::mesh::element::{to_format, Spacing};
 use crate::mesh::file::write_atomic;
 use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
 
@@ -54,128 +57,150 @@ impl<const D: usize> CurvedMesh<D> {
     }
 }
 
-/// The text of an equispaced mesh. Dangling part indices are skipped
-/// rather than trusted: the linear writers do not validate first.
+/// The text of an equispaced mesh the crate made ([`Layout::generated`]).
 fn msh_text<const D: usize>(mesh: &CurvedMesh<D>) -> String {
+    layout_text(&Layout::generated(mesh))
+}
+
+/// A layout as MSH 4.1 ASCII text: its groups, entities (bounding boxes
+/// of their nodes where they have any), nodes in one block per entity,
+/// elements in one block per entity and type, and periodic links.
+pub fn layout_text(layout: &Layout) -> String {
     let mut out = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
-    let mut per_part: Vec<Vec<usize>> = vec![Vec::new(); mesh.part_names.len()];
-    for (e, b) in mesh.boundary.iter().enumerate() {
-        if let Some(list) = per_part.get_mut(b.part) {
-            list.push(e);
+    if !layout.physical_names.is_empty() {
+        put!(out, "$PhysicalNames\n{}", layout.physical_names.len());
+        for g in &layout.physical_names {
+            put!(out, "{} {} \"{}\"", g.dim, g.tag, g.name);
         }
+        out.push_str("$EndPhysicalNames\n");
     }
-    push_physical_names(&mut out, mesh);
-    push_entities(&mut out, mesh, &per_part);
-    push_nodes(&mut out, mesh);
-    push_elements(&mut out, mesh, &per_part);
+    push_entities(&mut out, layout);
+    push_nodes(&mut out, layout);
+    push_elements(&mut out, layout);
+    push_periodic(&mut out, layout);
     out
 }
 
-/// Groups 1..k of the boundary dimension named after the parts, then the
-/// [`DOMAIN_NAME`] group of the mesh dimension.
-fn push_physical_names<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>) {
-    let k = mesh.part_names.len();
-    put!(out, "$PhysicalNames\n{}", k + 1);
-    for (i, name) in mesh.part_names.iter().enumerate() {
-        put!(out, "{} {} \"{name}\"", D - 1, i + 1);
-    }
-    put!(out, "{D} {} \"{DOMAIN_NAME}\"\n$EndPhysicalNames", k + 1);
-}
-
-/// Entity `i + 1` of the boundary dimension per part (physical tag
-/// `i + 1`, no bounding entities) and one entity of the mesh dimension
-/// bounded by all of them (physical tag `k + 1`).
-fn push_entities<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>, per_part: &[Vec<usize>]) {
-    let k = per_part.len();
-    let mut counts = [0; 4];
-    counts[D - 1] = k;
-    counts[D] = 1;
+/// Entities by dimension, in layout order within one.
+fn push_entities(out: &mut String, layout: &Layout) {
+    let boxes = entity_boxes(layout);
+    let counts: [usize; 4] = std::array::from_fn(|d| layout.entities.iter().filter(|e| e.dim == d).count());
     let [c0, c1, c2, c3] = counts;
     put!(out, "$Entities\n{c0} {c1} {c2} {c3}");
-    for (part, elements) in per_part.iter().enumerate() {
-        let nodes = elements.iter().flat_map(|&e| mesh.boundary[e].nodes.iter().copied());
-        put!(out, "{} {} 1 {} 0", part + 1, bounding_box(mesh, nodes), part + 1);
+    for dim in 0..4 {
+        for e in layout.entities.iter().filter(|e| e.dim == dim) {
+            let b = boxes.get(&(e.dim, e.tag)).copied().unwrap_or(e.bbox).map(fmt_f64);
+            let list = |tags: &[i64]| tags.iter().fold(tags.len().to_string(), |s, t| format!("{s} {t}"));
+            if dim == 0 {
+                put!(out, "{} {} {} {} {}", e.tag, b[0], b[1], b[2], list(&e.physicals));
+            } else {
+                put!(out, "{} {} {} {} {} {} {} {} {}", e.tag, b[0], b[1], b[2], b[3], b[4], b[5], list(&e.physicals), list(&e.bounding));
+            }
+        }
     }
-    let bounding: String = (1..=k).map(|t| format!(" {t}")).collect();
-    put!(out, "1 {} 1 {} {k}{bounding}", bounding_box(mesh, 0..mesh.nodes.len()), k + 1);
     out.push_str("$EndEntities\n");
 }
 
-/// `minX minY minZ maxX maxY maxZ` of the given nodes (zeros if none).
-fn bounding_box<const D: usize>(mesh: &CurvedMesh<D>, nodes: impl Iterator<Item = usize>) -> String {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for x in nodes.filter_map(|v| mesh.nodes.get(v)) {
-        for d in 0..3 {
-            let c = x.get(d).copied().unwrap_or(0.0);
-            lo[d] = lo[d].min(c);
-            hi[d] = hi[d].max(c);
+/// `min max` corners of the nodes of each entity's elements (a point
+/// entity: its node).
+fn entity_boxes(layout: &Layout) -> HashMap<(usize, i64), [f64; 6]> {
+    let mut boxes: HashMap<(usize, i64), [f64; 6]> = HashMap::new();
+    for el in &layout.elements {
+        let b = boxes.entry((el.shape.dim(), el.entity)).or_insert([f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY]);
+        for &n in &el.nodes {
+            let x = layout.coords[n];
+            for d in 0..3 {
+                b[d] = b[d].min(x[d]);
+                b[d + 3] = b[d + 3].max(x[d]);
+            }
         }
     }
-    if lo[0] > hi[0] {
-        return "0 0 0 0 0 0".to_string();
-    }
-    let [a, b, c, d, e, f] = [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(fmt_f64);
-    format!("{a} {b} {c} {d} {e} {f}")
+    boxes
 }
 
-/// `(min, max)` of `count` tags from 1; Gmsh writes `0 0` for none.
-fn tag_range(count: usize) -> (usize, usize) {
-    if count == 0 {
-        (0, 0)
-    } else {
-        (1, count)
-    }
+/// `(min, max)` of tags; Gmsh writes `0 0` for none.
+fn tag_range(tags: impl Iterator<Item = u64>) -> (u64, u64) {
+    tags.fold(None, |r: Option<(u64, u64)>, t| Some(r.map_or((t, t), |(a, b)| (a.min(t), b.max(t))))).unwrap_or((0, 0))
 }
 
-/// All nodes in one non-parametric block on the domain entity, tags 1..N,
-/// z = 0 in 2D.
-fn push_nodes<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>) {
-    let n = mesh.nodes.len();
-    let (lo, hi) = tag_range(n);
-    put!(out, "$Nodes\n1 {n} {lo} {hi}\n{D} 1 0 {n}");
-    for tag in 1..=n {
-        put!(out, "{tag}");
+/// One non-parametric block per entity (by dimension, then tag).
+fn push_nodes(out: &mut String, layout: &Layout) {
+    let mut blocks: Vec<((usize, i64), Vec<usize>)> = Vec::new();
+    let mut index: HashMap<(usize, i64), usize> = HashMap::new();
+    for (n, &entity) in layout.node_entity.iter().enumerate() {
+        let k = *index.entry(entity).or_insert_with(|| {
+            blocks.push((entity, Vec::new()));
+            blocks.len() - 1
+        });
+        blocks[k].1.push(n);
     }
-    for x in &mesh.nodes {
-        let z = if D == 3 { x[2] } else { 0.0 };
-        put!(out, "{} {} {}", fmt_f64(x[0]), fmt_f64(x[1]), fmt_f64(z));
+    blocks.sort_by_key(|b| b.0);
+    let (lo, hi) = tag_range(layout.node_tags.iter().copied());
+    put!(out, "$Nodes\n{} {} {lo} {hi}", blocks.len(), layout.coords.len());
+    for ((dim, tag), nodes) in &blocks {
+        put!(out, "{dim} {tag} 0 {}", nodes.len());
+        for &n in nodes {
+            put!(out, "{}", layout.node_tags[n]);
+        }
+        for &n in nodes {
+            let x = layout.coords[n];
+            put!(out, "{} {} {}", fmt_f64(x[0]), fmt_f64(x[1]), fmt_f64(x[2]));
+        }
     }
     out.push_str("$EndNodes\n");
 }
 
-/// One block per non-empty part, then the cell block, nodes in Gmsh's
-/// order (MSH node tags start at 1).
-fn push_elements<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>, per_part: &[Vec<usize>]) {
-    let p = mesh.p;
-    let ok = "order checked by validate";
-    let (cell_perm, face_perm, cell_type, face_type) = match D {
-        2 => (gmsh_quad_order(p).expect(ok), gmsh_line_order(p).expect(ok), MSH_QUAD_TYPES[p - 1], MSH_LINE_TYPES[p - 1]),
-        _ => (gmsh_hex_order(p).expect(ok), gmsh_quad_order(p).expect(ok), MSH_HEX_TYPES[p - 1], MSH_QUAD_TYPES[p - 1]),
+/// One block per (dimension, entity, type), nodes in Gmsh's order.
+fn push_elements(out: &mut String, layout: &Layout) {
+    let mut order: Vec<usize> = (0..layout.elements.len()).collect();
+    let key = |e: usize| {
+        let el = &layout.elements[e];
+        (el.shape.dim(), el.entity, el.order)
     };
-    let blocks = per_part.iter().filter(|b| !b.is_empty()).count() + usize::from(!mesh.cells.is_empty());
-    let total = per_part.iter().map(Vec::len).sum::<usize>() + mesh.cells.len();
-    let (lo, hi) = tag_range(mesh.boundary.len() + mesh.cells.len());
-    put!(out, "$Elements\n{blocks} {total} {lo} {hi}");
-    let push = |out: &mut String, tag: usize, nodes: &[usize], perm: &[usize]| {
-        let _ = write!(out, "{tag}");
-        for v in to_format(perm, nodes) {
-            let _ = write!(out, " {}", v + 1);
-        }
-        out.push('\n');
-    };
-    for (part, elements) in per_part.iter().enumerate().filter(|(_, b)| !b.is_empty()) {
-        put!(out, "{} {} {face_type} {}", D - 1, part + 1, elements.len());
-        for &e in elements {
-            push(out, e + 1, &mesh.boundary[e].nodes, &face_perm);
-        }
-    }
-    if !mesh.cells.is_empty() {
-        put!(out, "{D} 1 {cell_type} {}", mesh.cells.len());
-        let first = mesh.boundary.len() + 1;
-        for (c, cell) in mesh.cells.iter().enumerate() {
-            push(out, first + c, cell, &cell_perm);
+    order.sort_by_key(|&e| key(e));
+    let blocks = order.chunk_by(|&a, &b| key(a) == key(b)).collect::<Vec<_>>();
+    let (lo, hi) = tag_range(layout.elements.iter().map(|e| e.tag));
+    put!(out, "$Elements\n{} {} {lo} {hi}", blocks.len(), layout.elements.len());
+    for block in blocks {
+        let first = &layout.elements[block[0]];
+        let perm = tensor_perm(first.shape.dim(), first.order);
+        put!(out, "{} {} {} {}", first.shape.dim(), first.entity, msh_type(first.shape, first.order), block.len());
+        for &e in block {
+            let el = &layout.elements[e];
+            let _ = write!(out, "{}", el.tag);
+            for v in to_format(&perm, &el.nodes) {
+                let _ = write!(out, " {}", layout.node_tags[v]);
+            }
+            out.push('\n');
         }
     }
     out.push_str("$EndElements\n");
+}
+
+/// The MSH element type of a shape of order `p` (1..=4).
+pub fn msh_type(shape: Shape, p: usize) -> i64 {
+    match shape {
+        Shape::Point => 15,
+        Shape::Line => MSH_LINE_TYPES[p - 1],
+        Shape::Quad => MSH_QUAD_TYPES[p - 1],
+        Shape::Hex => MSH_HEX_TYPES[p - 1],
+    }
+}
+
+/// `$Periodic`, if the layout has links.
+fn push_periodic(out: &mut String, layout: &Layout) {
+    if layout.periodic.is_empty() {
+        return;
+    }
+    put!(out, "$Periodic\n{}", layout.periodic.len());
+    for link in &layout.periodic {
+        put!(out, "{} {} {}", link.dim, link.slave, link.master);
+        let affine: String = link.affine.iter().map(|&v| format!(" {}", fmt_f64(v))).collect();
+        put!(out, "{}{affine}", link.affine.len());
+        put!(out, "{}", link.pairs.len());
+        for &(s, m) in &link.pairs {
+            put!(out, "{} {}", layout.node_tags[s], layout.node_tags[m]);
+        }
+    }
+    out.push_str("$EndPeriodic\n");
 }

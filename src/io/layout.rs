@@ -1,0 +1,679 @@
+//! What a mesh file holds besides the cells the method works on: its
+//! physical groups, its entities, which entity each node and element is
+//! on, the file's node and element tags, elements of lower dimensions
+//! (points, curves of a 3D mesh) and periodic node pairs. A reader gives
+//! the input's [`Layout`]; [`Layout::curved`] carries it onto the curved
+//! mesh (new nodes numbered after the input's, every element and group
+//! kept with its tag); the writers of every format write a `Layout`.
+//! A mesh made by the crate itself has [`Layout::generated`].
+//!
+//! Element nodes are in the crate's tensor order ([`crate::mesh::element`])
+//! at the element's order; writers turn them into the format's order.
+
+use std::collections::HashMap;
+
+use thiserror::Error;
+
+use crate::mesh::CurvedMesh;
+
+/// Name of the physical group that holds all cells of a mesh the crate
+/// made (dimension 2 for quad meshes, 3 for hex meshes).
+pub const DOMAIN_NAME: &str = "domain";
+
+/// A named physical group: `$PhysicalNames`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhysicalName {
+    /// Its dimension.
+    pub dim: usize,
+    /// Its tag (the number solvers key boundary conditions on).
+    pub tag: i64,
+    /// Its name.
+    pub name: String,
+}
+
+/// A geometric entity: a point, curve, surface or volume of `$Entities`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entity {
+    /// 0 to 3.
+    pub dim: usize,
+    /// Its tag among the entities of its dimension.
+    pub tag: i64,
+    /// Its point (dimension 0) or bounding box `min max` as the file gave
+    /// it; writers put the box of its nodes where it has any.
+    pub bbox: [f64; 6],
+    /// The physical groups it is in.
+    pub physicals: Vec<i64>,
+    /// Signed tags of the entities of dimension `dim − 1` bounding it.
+    pub bounding: Vec<i64>,
+}
+
+/// The kinds of element a layout holds (the reference shapes of the
+/// quad/hex method and their faces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Shape {
+    /// One node.
+    Point,
+    /// A segment.
+    Line,
+    /// A quadrilateral.
+    Quad,
+    /// A hexahedron.
+    Hex,
+}
+
+impl Shape {
+    /// Its dimension.
+    pub fn dim(self) -> usize {
+        match self {
+            Shape::Point => 0,
+            Shape::Line => 1,
+            Shape::Quad => 2,
+            Shape::Hex => 3,
+        }
+    }
+
+    /// The tensor-product shape of dimension `dim` (0..=3).
+    pub fn of_dim(dim: usize) -> Shape {
+        [Shape::Point, Shape::Line, Shape::Quad, Shape::Hex][dim.min(3)]
+    }
+
+    /// Nodes of a Lagrange element of order `p` (points have one).
+    pub fn nodes(self, p: usize) -> usize {
+        (p + 1).pow(self.dim() as u32)
+    }
+}
+
+/// One element of a file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Element {
+    /// Its tag in the file.
+    pub tag: u64,
+    /// The tag of the entity of its dimension it lies on.
+    pub entity: i64,
+    /// Its shape.
+    pub shape: Shape,
+    /// Its Lagrange order (1 for points).
+    pub order: usize,
+    /// Indices into [`Layout::coords`], tensor order.
+    pub nodes: Vec<usize>,
+}
+
+/// Nodes of one entity paired with those of its master (`$Periodic`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Periodic {
+    /// The dimension of both entities.
+    pub dim: usize,
+    /// The entity whose nodes are images.
+    pub slave: i64,
+    /// The entity they are images of.
+    pub master: i64,
+    /// The 4×4 affine map from master to slave, by rows (16 values), or
+    /// empty where the file gave none.
+    pub affine: Vec<f64>,
+    /// `(slave node, master node)`, indices into [`Layout::coords`].
+    pub pairs: Vec<(usize, usize)>,
+}
+
+/// A whole mesh file: groups, entities, nodes, elements, periodicity.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Layout {
+    /// The named physical groups.
+    pub physical_names: Vec<PhysicalName>,
+    /// Every entity, of every dimension.
+    pub entities: Vec<Entity>,
+    /// Node coordinates (z = 0 in 2D).
+    pub coords: Vec<[f64; 3]>,
+    /// The file's tag of every node.
+    pub node_tags: Vec<u64>,
+    /// `(dimension, tag)` of the entity each node is on.
+    pub node_entity: Vec<(usize, i64)>,
+    /// Every element, of every dimension, in file order.
+    pub elements: Vec<Element>,
+    /// Periodic links.
+    pub periodic: Vec<Periodic>,
+    /// Sections of the file that no writer reproduces (`$NodeData`, …),
+    /// by name, so that a caller that must lose nothing can refuse them.
+    pub unkept_sections: Vec<String>,
+    /// Whether some node block gave parametric coordinates (not kept).
+    pub parametric: bool,
+}
+
+/// Why an input's layout cannot be carried onto its curved mesh.
+#[derive(Clone, Debug, Error, PartialEq)]
+pub enum LayoutError {
+    /// An element of the input has no counterpart in the curved mesh.
+    #[error("element {tag} of the input (a {shape:?} on entity {entity}) is not in the curved mesh: {why}")]
+    Lost {
+        /// Its tag.
+        tag: u64,
+        /// Its shape.
+        shape: Shape,
+        /// Its entity.
+        entity: i64,
+        /// Why.
+        why: String,
+    },
+    /// A node on a periodic entity has no image on its master.
+    #[error(
+        "periodic link of entity {slave} (dimension {dim}) to master {master}: the node at {at:?} on the slave has no node on the master that the affine map takes to it \
+         (nearest {miss:.3e} off): the two sides were curved differently. Leave both sides out of the geometry file (their nodes then stay where they are), or bind them to shapes that are images of each other"
+    )]
+    Unpaired {
+        /// The dimension.
+        dim: usize,
+        /// The slave entity.
+        slave: i64,
+        /// The master entity.
+        master: i64,
+        /// Where the unpaired node is.
+        at: [f64; 3],
+        /// How far the nearest candidate is from its image.
+        miss: f64,
+    },
+    /// A periodic link without an affine map whose pairs are not a
+    /// translation either.
+    #[error("periodic link of entity {slave} (dimension {dim}) to master {master} gives no affine map and its node pairs are no translation: new nodes cannot be paired")]
+    NoAffine {
+        /// The dimension.
+        dim: usize,
+        /// The slave entity.
+        slave: i64,
+        /// The master entity.
+        master: i64,
+    },
+}
+
+/// How far, relative to the mesh's extent, a new node of a periodic
+/// slave may be from the image of its master to be taken as its pair
+/// (and put there): CG stops at a relative residual of 1e-7, so the two
+/// sides of a flow agree to about that; curved differently, they are
+/// apart by a fraction of a cell.
+pub const PAIR_TOLERANCE: f64 = 1e-6;
+
+/// `x` padded to three coordinates.
+fn pad<const D: usize>(x: &[f64; D]) -> [f64; 3] {
+    std::array::from_fn(|d| if d < D { x[d] } else { 0.0 })
+}
+
+impl Layout {
+    /// The layout of a mesh the crate made: boundary part `i` is entity
+    /// `i + 1` of dimension `D − 1` in physical group `i + 1` named after
+    /// the part, all cells and nodes are on entity 1 of dimension `D`, in
+    /// the group [`DOMAIN_NAME`] (tag `k + 1`); boundary element `e` has
+    /// tag `e + 1`, cell `c` tag `boundary.len() + c + 1`, node `i` tag
+    /// `i + 1`. Boundary elements of a part index out of range are left
+    /// out.
+    pub fn generated<const D: usize>(mesh: &CurvedMesh<D>) -> Layout {
+        let k = mesh.part_names.len();
+        let mut physical_names: Vec<PhysicalName> =
+            mesh.part_names.iter().enumerate().map(|(i, name)| PhysicalName { dim: D - 1, tag: i as i64 + 1, name: name.clone() }).collect();
+        physical_names.push(PhysicalName { dim: D, tag: k as i64 + 1, name: DOMAIN_NAME.into() });
+        let entity = |dim, tag: i64, physical: i64, bounding| Entity { dim, tag, bbox: [0.0; 6], physicals: vec![physical], bounding };
+        let mut entities: Vec<Entity> = (1..=k as i64).map(|t| entity(D - 1, t, t, Vec::new())).collect();
+        entities.push(entity(D, 1, k as i64 + 1, (1..=k as i64).collect()));
+        let (p, nb) = (mesh.p, mesh.boundary.len());
+        let facets = mesh.boundary.iter().enumerate().filter(|(_, b)| b.part < k);
+        let mut elements: Vec<Element> = facets
+            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: Shape::of_dim(D - 1), order: p, nodes: b.nodes.clone() })
+            .collect();
+        let cells = mesh.cells.iter().enumerate();
+        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: Shape::of_dim(D), order: p, nodes: n.clone() }));
+        Layout {
+            physical_names,
+            entities,
+            coords: mesh.nodes.iter().map(pad).collect(),
+            node_tags: (1..=mesh.nodes.len() as u64).collect(),
+            node_entity: vec![(D, 1); mesh.nodes.len()],
+            elements,
+            ..Layout::default()
+        }
+    }
+
+    /// The input's layout carried onto its curved mesh: `mesh` was made
+    /// from the input's cells (in order of element tag), `coarse_nodes[i]`
+    /// is the curved mesh's node at input node `i` (`usize::MAX` for a
+    /// node in no cell). Every group, entity, element and periodic link
+    /// of the input is kept with its tags; elements of dimension below the
+    /// cells' are raised to the mesh's order with the nodes of the cells'
+    /// edges and faces; new nodes are numbered after the input's largest
+    /// tag, on the entity of the lowest-dimensional element that holds
+    /// them; periodic links gain the pairs of their new nodes.
+    /// Returns the layout and the largest move of a new periodic node put
+    /// at its master's image (see [`Layout::snap_periodic`]): the caller
+    /// moves the mesh's nodes to [`Layout::coords`] and certifies again
+    /// if it is not 0.
+    pub fn curved<const D: usize>(&self, mesh: &CurvedMesh<D>, coarse_nodes: &[usize]) -> Result<(Layout, f64), LayoutError> {
+        let (coords, of_input) = self.merged_nodes(mesh, coarse_nodes);
+        let p = mesh.p;
+        let lookup = SubElements::new(mesh);
+        let mut cells_by_tag: Vec<usize> = (0..self.elements.len()).filter(|&e| self.elements[e].shape.dim() == D).collect();
+        cells_by_tag.sort_by_key(|&e| self.elements[e].tag);
+        let cell_of: HashMap<usize, usize> = cells_by_tag.iter().enumerate().map(|(c, &e)| (e, c)).collect();
+        let mut elements = Vec::with_capacity(self.elements.len());
+        for (e, el) in self.elements.iter().enumerate() {
+            let corners: Vec<usize> = el.nodes.iter().map(|&n| of_input[n]).collect();
+            let lost = |why: &str| LayoutError::Lost { tag: el.tag, shape: el.shape, entity: el.entity, why: why.into() };
+            let (order, nodes) = match el.shape.dim() {
+                0 => (1, corners),
+                d if d == D => (p, mesh.cells.get(cell_of[&e]).ok_or_else(|| lost("fewer curved cells than input cells"))?.clone()),
+                _ => (p, lookup.find(&corners).ok_or_else(|| lost("its corners are no edge or face of a cell"))?),
+            };
+            elements.push(Element { tag: el.tag, entity: el.entity, shape: el.shape, order, nodes });
+        }
+        let node_tags = self.new_node_tags(&of_input, coords.len());
+        let node_entity = self.new_node_entities(&of_input, &elements, coords.len());
+        let mut out = Layout { physical_names: self.physical_names.clone(), entities: self.entities.clone(), coords, node_tags, node_entity, elements, ..Layout::default() };
+        let mut new_pairs = Vec::new();
+        for link in &self.periodic {
+            let (carried, map, new) = out.carry_periodic(link, &of_input)?;
+            out.periodic.push(carried);
+            new_pairs.push((map, new));
+        }
+        let snapped = out.snap_periodic(&new_pairs);
+        Ok((out, snapped))
+    }
+
+    /// Puts every new slave node exactly at the affine image of its
+    /// master (they were paired within [`PAIR_TOLERANCE`]: the flow's
+    /// solves stop at a residual, so the two sides agree only that far);
+    /// passes repeat so that a master that is itself a slave of another
+    /// link (an edge periodic in two directions) is placed first. Returns
+    /// the largest move.
+    fn snap_periodic(&mut self, links: &[([f64; 12], Vec<(usize, usize)>)]) -> f64 {
+        let mut largest: f64 = 0.0;
+        for _ in 0..4 {
+            let mut moved = false;
+            for (map, pairs) in links {
+                for &(s, m) in pairs {
+                    let image = apply(map, self.coords[m]);
+                    let d = dist(image, self.coords[s]);
+                    if d > 0.0 {
+                        largest = largest.max(d);
+                        moved = true;
+                        self.coords[s] = image;
+                    }
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        largest
+    }
+
+    /// The layout as a mesh of its cells (dimension `D`, in order of
+    /// element tag: the order the readers give) and its elements of
+    /// dimension `D − 1`, each once, for the writers of formats without
+    /// entities: with the attribute of every cell and boundary element
+    /// (the first physical tag of its entity, else the entity's tag: the
+    /// numbers solvers key on) and, as the boundary parts, the names of
+    /// those groups (`surface<tag>` / `curve<tag>` for an entity in none).
+    pub fn as_mesh<const D: usize>(&self) -> (CurvedMesh<D>, Vec<i64>, Vec<i64>) {
+        let mut cells: Vec<&Element> = self.elements.iter().filter(|e| e.shape.dim() == D).collect();
+        cells.sort_by_key(|e| e.tag);
+        let facets: Vec<&Element> = self.elements.iter().filter(|e| e.shape.dim() + 1 == D).collect();
+        let attribute = |dim: usize, entity: i64| {
+            let e = self.entities.iter().find(|x| x.dim == dim && x.tag == entity);
+            e.and_then(|x| x.physicals.first().copied()).unwrap_or(entity)
+        };
+        let mut part_names: Vec<String> = Vec::new();
+        let mut part_of: HashMap<i64, usize> = HashMap::new();
+        let mut boundary = Vec::with_capacity(facets.len());
+        let mut boundary_attributes = Vec::with_capacity(facets.len());
+        for f in &facets {
+            let a = attribute(D - 1, f.entity);
+            let part = *part_of.entry(a).or_insert_with(|| {
+                let named = self.physical_names.iter().find(|g| g.dim == D - 1 && g.tag == a);
+                part_names.push(named.map_or_else(|| format!("{}{a}", if D == 2 { "curve" } else { "surface" }), |g| g.name.clone()));
+                part_names.len() - 1
+            });
+            boundary.push(crate::mesh::CurvedBoundary { nodes: f.nodes.clone(), part });
+            boundary_attributes.push(a);
+        }
+        let mesh = CurvedMesh {
+            p: cells.first().map_or(1, |c| c.order),
+            spacing: crate::mesh::element::Spacing::Equispaced,
+            nodes: self.coords.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
+            cells: cells.iter().map(|c| c.nodes.clone()).collect(),
+            boundary,
+            part_names,
+        };
+        let cell_attributes = cells.iter().map(|c| attribute(D, c.entity)).collect();
+        (mesh, cell_attributes, boundary_attributes)
+    }
+
+    /// The curved mesh's nodes, then input nodes in no cell; and where
+    /// each input node went.
+    fn merged_nodes<const D: usize>(&self, mesh: &CurvedMesh<D>, coarse_nodes: &[usize]) -> (Vec<[f64; 3]>, Vec<usize>) {
+        let mut coords: Vec<[f64; 3]> = mesh.nodes.iter().map(pad).collect();
+        let of_input = (0..self.coords.len())
+            .map(|i| match coarse_nodes.get(i).copied().filter(|&n| n < mesh.nodes.len()) {
+                Some(n) => n,
+                None => {
+                    coords.push(self.coords[i]);
+                    coords.len() - 1
+                }
+            })
+            .collect();
+        (coords, of_input)
+    }
+
+    /// Input nodes keep their tags; new ones count on from the largest.
+    fn new_node_tags(&self, of_input: &[usize], count: usize) -> Vec<u64> {
+        let mut tags = vec![0u64; count];
+        for (i, &n) in of_input.iter().enumerate() {
+            tags[n] = self.node_tags[i];
+        }
+        let mut next = self.node_tags.iter().copied().max().unwrap_or(0);
+        for t in tags.iter_mut().filter(|t| **t == 0) {
+            next += 1;
+            *t = next;
+        }
+        tags
+    }
+
+    /// Input nodes keep their entities; a new node goes on the entity of
+    /// the lowest-dimensional element holding it.
+    fn new_node_entities(&self, of_input: &[usize], elements: &[Element], count: usize) -> Vec<(usize, i64)> {
+        let mut entity: Vec<Option<(usize, i64)>> = vec![None; count];
+        for (i, &n) in of_input.iter().enumerate() {
+            entity[n] = Some(self.node_entity[i]);
+        }
+        let mut by_dim: Vec<&Element> = elements.iter().collect();
+        by_dim.sort_by_key(|e| e.shape.dim());
+        for el in by_dim {
+            for &n in &el.nodes {
+                entity[n].get_or_insert((el.shape.dim(), el.entity));
+            }
+        }
+        // a node in no element at all (none is made so) stays on the first cell's entity
+        let fallback = elements.iter().max_by_key(|e| e.shape.dim()).map_or((0, 0), |e| (e.shape.dim(), e.entity));
+        entity.into_iter().map(|e| e.unwrap_or(fallback)).collect()
+    }
+
+    /// An input link with its pairs on this (curved) layout's nodes, and
+    /// pairs for every other node of the slave's closure: a side is the
+    /// nodes the input paired on it and the corners of its elements;
+    /// every node of a sub-element (edge, face) whose corners are all on
+    /// the slave is paired with the master node that the affine map takes
+    /// nearest to it. Returns the link, its map and the pairs whose slave
+    /// is a new node (those the caller may move onto the image).
+    fn carry_periodic(&self, link: &Periodic, of_input: &[usize]) -> Result<(Periodic, [f64; 12], Vec<(usize, usize)>), LayoutError> {
+        use std::collections::HashSet;
+        let old: Vec<(usize, usize)> = link.pairs.iter().map(|&(s, m)| (of_input[s], of_input[m])).collect();
+        let map = affine_of(link, &old, &self.coords).ok_or(LayoutError::NoAffine { dim: link.dim, slave: link.slave, master: link.master })?;
+        let side = |entity: i64, paired: &mut dyn Iterator<Item = usize>| -> HashSet<usize> {
+            let on = self.elements.iter().filter(|e| e.shape.dim() == link.dim && e.entity == entity);
+            let corners = on.flat_map(|e| corner_indices(e.shape, e.order).into_iter().map(|c| e.nodes[c]));
+            paired.chain(corners).collect()
+        };
+        let slave_side = side(link.slave, &mut old.iter().map(|&(s, _)| s));
+        let master_side = side(link.master, &mut old.iter().map(|&(_, m)| m));
+        let closure = |side: &HashSet<usize>| -> Vec<usize> {
+            let mut nodes: Vec<usize> = self.sub_nodes_within(link.dim, side);
+            nodes.extend(side.iter().copied());
+            nodes.sort_unstable();
+            nodes.dedup();
+            nodes
+        };
+        let paired: HashSet<usize> = old.iter().map(|&(s, _)| s).collect();
+        let slaves: Vec<usize> = closure(&slave_side).into_iter().filter(|n| !paired.contains(n)).collect();
+        let masters = closure(&master_side);
+        let images: Vec<[f64; 3]> = masters.iter().map(|&m| apply(&map, self.coords[m])).collect();
+        let scale = self.extent().max(f64::MIN_POSITIVE);
+        let grid = PointGrid::new(&images, scale * PAIR_TOLERANCE);
+        let old_nodes: HashSet<usize> = of_input.iter().copied().collect();
+        let (mut pairs, mut movable) = (old, Vec::new());
+        for s in slaves {
+            let x = self.coords[s];
+            let (k, miss) = grid.nearest(&images, x);
+            if miss > PAIR_TOLERANCE * scale {
+                return Err(LayoutError::Unpaired { dim: link.dim, slave: link.slave, master: link.master, at: x, miss });
+            }
+            pairs.push((s, masters[k]));
+            if !old_nodes.contains(&s) {
+                movable.push((s, masters[k]));
+            }
+        }
+        Ok((Periodic { dim: link.dim, slave: link.slave, master: link.master, affine: link.affine.clone(), pairs }, map, movable))
+    }
+
+    /// Nodes of the sub-elements of dimension `dim` (a cell's edges or
+    /// faces, or a boundary element itself) whose corners all lie in
+    /// `side`.
+    fn sub_nodes_within(&self, dim: usize, side: &std::collections::HashSet<usize>) -> Vec<usize> {
+        let mut out = Vec::new();
+        if dim == 0 {
+            return out;
+        }
+        for el in self.elements.iter().filter(|e| e.shape.dim() >= dim) {
+            let corners = corner_indices(Shape::of_dim(dim), el.order);
+            for sub in sub_elements(el.shape, el.order, dim) {
+                if corners.iter().all(|&c| side.contains(&el.nodes[sub[c]])) {
+                    out.extend(sub.iter().map(|&i| el.nodes[i]));
+                }
+            }
+        }
+        out
+    }
+
+    /// The diagonal of the nodes' bounding box.
+    fn extent(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for x in &self.coords {
+            for d in 0..3 {
+                lo[d] = lo[d].min(x[d]);
+                hi[d] = hi[d].max(x[d]);
+            }
+        }
+        (0..3).map(|d| (hi[d] - lo[d]).max(0.0).powi(2)).sum::<f64>().sqrt()
+    }
+}
+
+/// The affine map of a link as 12 numbers (3×4, by rows): the file's,
+/// checked against the first pair (or its inverse, if the file's maps the
+/// other way), else the translation of the pairs, if they all agree.
+fn affine_of(link: &Periodic, pairs: &[(usize, usize)], coords: &[[f64; 3]]) -> Option<[f64; 12]> {
+    let scale = coords.iter().flat_map(|x| x.iter()).fold(0.0f64, |a, &b| a.max(b.abs())).max(1.0);
+    let fits = |m: &[f64; 12]| pairs.iter().all(|&(s, ms)| dist(apply(m, coords[ms]), coords[s]) <= 1e-8 * scale);
+    if link.affine.len() == 16 {
+        let m: [f64; 12] = std::array::from_fn(|i| link.affine[i]);
+        if fits(&m) {
+            return Some(m);
+        }
+    }
+    let &(s, m) = pairs.first()?;
+    let t: [f64; 3] = std::array::from_fn(|d| coords[s][d] - coords[m][d]);
+    let shift = [1.0, 0.0, 0.0, t[0], 0.0, 1.0, 0.0, t[1], 0.0, 0.0, 1.0, t[2]];
+    fits(&shift).then_some(shift)
+}
+
+/// The distance of two points.
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    crate::numeric::norm(crate::numeric::sub(a, b))
+}
+
+/// `m x` for a 3×4 affine map.
+fn apply(m: &[f64; 12], x: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| m[4 * r] * x[0] + m[4 * r + 1] * x[1] + m[4 * r + 2] * x[2] + m[4 * r + 3])
+}
+
+/// Local (tensor) indices of the corners of a tensor element of order `p`,
+/// in tensor order of the corners.
+fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
+    let d = shape.dim();
+    (0..1usize << d).map(|bits| (0..d).map(|k| ((bits >> k) & 1) * p * (p + 1).pow(k as u32)).sum()).collect()
+}
+
+/// Every sub-element of dimension `dim` of a tensor element of order `p`
+/// (its edges for 1, faces for 2, itself for its own dimension), as local
+/// indices in the sub-element's own tensor order.
+fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<Vec<usize>> {
+    let d = shape.dim();
+    if dim > d {
+        return Vec::new();
+    }
+    if dim == 0 {
+        return corner_indices(shape, p).into_iter().map(|c| vec![c]).collect();
+    }
+    let n1 = p + 1;
+    let stride = |k: usize| n1.pow(k as u32);
+    let mut out = Vec::new();
+    // the free axes, in increasing order, and the fixed ones at 0 or p
+    for free in (0..1usize << d).filter(|m| m.count_ones() as usize == dim) {
+        let axes: Vec<usize> = (0..d).filter(|k| free >> k & 1 == 1).collect();
+        let fixed: Vec<usize> = (0..d).filter(|k| free >> k & 1 == 0).collect();
+        for side in 0..1usize << fixed.len() {
+            let base: usize = fixed.iter().enumerate().map(|(j, &k)| ((side >> j) & 1) * p * stride(k)).sum();
+            let nodes = (0..n1.pow(dim as u32))
+                .map(|i| base + axes.iter().enumerate().map(|(j, &k)| (i / n1.pow(j as u32) % n1) * stride(k)).sum::<usize>())
+                .collect();
+            out.push(nodes);
+        }
+    }
+    out
+}
+
+/// The edges and faces of the curved mesh's cells, by their corner sets.
+struct SubElements {
+    /// Sorted corners → the sub-element's nodes in its own tensor order.
+    by_corners: HashMap<Vec<usize>, Vec<usize>>,
+    /// Tensor indices of corners of a sub-element, per dimension.
+    p: usize,
+}
+
+impl SubElements {
+    fn new<const D: usize>(mesh: &CurvedMesh<D>) -> SubElements {
+        let mut by_corners = HashMap::new();
+        let shape = Shape::of_dim(D);
+        for cell in &mesh.cells {
+            for dim in 1..D {
+                let corners = corner_indices(Shape::of_dim(dim), mesh.p);
+                for sub in sub_elements(shape, mesh.p, dim) {
+                    let nodes: Vec<usize> = sub.iter().map(|&i| cell[i]).collect();
+                    let mut key: Vec<usize> = corners.iter().map(|&c| nodes[c]).collect();
+                    key.sort_unstable();
+                    by_corners.entry(key).or_insert(nodes);
+                }
+            }
+        }
+        for b in &mesh.boundary {
+            let corners = corner_indices(Shape::of_dim(D - 1), mesh.p);
+            let mut key: Vec<usize> = corners.iter().map(|&c| b.nodes[c]).collect();
+            key.sort_unstable();
+            // the boundary element's own orientation is the one to keep
+            by_corners.insert(key, b.nodes.clone());
+        }
+        SubElements { by_corners, p: mesh.p }
+    }
+
+    /// The nodes of the edge or face with the given corners (tensor
+    /// order of the input element), oriented as the input element: its
+    /// first corner first and, for a face, its second corner next.
+    fn find(&self, corners: &[usize]) -> Option<Vec<usize>> {
+        let mut key = corners.to_vec();
+        key.sort_unstable();
+        let nodes = self.by_corners.get(&key)?;
+        let dim = if corners.len() == 2 { 1 } else { 2 };
+        let p = self.p;
+        let n1 = p + 1;
+        // the symmetries of the segment or square, applied to (u, v)
+        let maps: Vec<Box<dyn Fn(usize, usize) -> (usize, usize)>> = if dim == 1 {
+            vec![Box::new(|u, v| (u, v)), Box::new(move |u, v| (p - u, v))]
+        } else {
+            vec![
+                Box::new(|u, v| (u, v)),
+                Box::new(move |u, v| (p - u, v)),
+                Box::new(move |u, v| (u, p - v)),
+                Box::new(move |u, v| (p - u, p - v)),
+                Box::new(|u, v| (v, u)),
+                Box::new(move |u, v| (p - v, u)),
+                Box::new(move |u, v| (v, p - u)),
+                Box::new(move |u, v| (p - v, p - u)),
+            ]
+        };
+        let count = n1.pow(dim as u32);
+        let nv = if dim == 1 { 1 } else { n1 };
+        let at = |i: usize| (i % n1, i / n1);
+        let ends = corner_indices(Shape::of_dim(dim), p);
+        maps.iter().find_map(|f| {
+            let image = |i: usize| {
+                let (u, v) = at(i);
+                let (a, b) = f(u, v);
+                if nv == 1 { a } else { a + n1 * b }
+            };
+            let out: Vec<usize> = (0..count).map(|i| nodes[image(i)]).collect();
+            ends.iter().zip(corners).all(|(&c, &want)| out[c] == want).then_some(out)
+        })
+    }
+}
+
+/// A uniform grid of points for nearest-point queries.
+struct PointGrid {
+    cell: f64,
+    bins: HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl PointGrid {
+    fn new(points: &[[f64; 3]], cell: f64) -> PointGrid {
+        let mut bins: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        for (i, x) in points.iter().enumerate() {
+            bins.entry(Self::bin(x, cell)).or_default().push(i);
+        }
+        PointGrid { cell, bins }
+    }
+
+    fn bin(x: &[f64; 3], cell: f64) -> [i64; 3] {
+        std::array::from_fn(|d| (x[d] / cell).floor() as i64)
+    }
+
+    /// The point nearest `x` among the 27 bins around it, or the
+    /// nearest of all (with its distance) if they are empty.
+    fn nearest(&self, points: &[[f64; 3]], x: [f64; 3]) -> (usize, f64) {
+        let b = Self::bin(&x, self.cell);
+        let distance = |i: usize| (i, dist(points[i], x));
+        let closer = |a: (usize, f64), b: (usize, f64)| if b.1 < a.1 { b } else { a };
+        let near = (0..27)
+            .flat_map(|k| {
+                let key = [b[0] + k % 3 - 1, b[1] + k / 3 % 3 - 1, b[2] + k / 9 - 1];
+                self.bins.get(&key).into_iter().flatten().copied()
+            })
+            .map(distance)
+            .reduce(closer);
+        near.or_else(|| (0..points.len()).map(distance).reduce(closer)).unwrap_or((0, f64::INFINITY))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sub_elements_of_a_hex_are_its_12_edges_and_6_faces() {
+        let edges = sub_elements(Shape::Hex, 2, 1);
+        let faces = sub_elements(Shape::Hex, 2, 2);
+        assert_eq!((edges.len(), faces.len()), (12, 6));
+        // the edge along x at y = z = 0 of a p = 2 hex: nodes 0, 1, 2
+        assert!(edges.contains(&vec![0, 1, 2]));
+        // the edge along z at x = p, y = p: 8, 17, 26
+        assert!(edges.contains(&vec![8, 17, 26]));
+        // the face z = p: nodes 18..27
+        assert!(faces.contains(&(18..27).collect::<Vec<_>>()));
+        assert_eq!(corner_indices(Shape::Quad, 3), vec![0, 3, 12, 15]);
+    }
+
+    #[test]
+    fn a_face_is_found_in_the_orientation_asked_for() {
+        let mesh = CurvedMesh::<3>::structured(2, crate::mesh::element::Spacing::Equispaced, [1, 1, 1], |x| x).unwrap();
+        let lookup = SubElements::new(&mesh);
+        let cell = &mesh.cells[0];
+        // the face x = 0 asked from corner (0,0,0) towards (0,0,1), then (0,1,0)
+        let (a, b, c, d) = (cell[0], cell[18], cell[6], cell[24]);
+        let face = lookup.find(&[a, b, c, d]).expect("a face of the cell");
+        assert_eq!((face[0], face[2], face[6], face[8]), (a, b, c, d));
+        // its middle node is the face's centre
+        assert_eq!(face[4], cell[12]);
+        assert!(lookup.find(&[a, cell[26]]).is_none(), "a diagonal is no edge");
+    }
+}
