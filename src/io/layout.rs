@@ -245,7 +245,12 @@ impl Layout {
     pub fn curved<const D: usize>(&self, mesh: &CurvedMesh<D>, coarse_nodes: &[usize]) -> Result<(Layout, f64), LayoutError> {
         let (coords, of_input) = self.merged_nodes(mesh, coarse_nodes);
         let p = mesh.p;
-        let lookup = SubElements::new(mesh);
+        let wanted = self.elements.iter().filter(|e| (1..D).contains(&e.shape.dim())).map(|e| {
+            let mut key: Vec<usize> = e.nodes.iter().map(|&n| of_input[n]).collect();
+            key.sort_unstable();
+            key
+        });
+        let lookup = SubElements::new(mesh, &wanted.collect());
         let mut cells_by_tag: Vec<usize> = (0..self.elements.len()).filter(|&e| self.elements[e].shape.dim() == D).collect();
         cells_by_tag.sort_by_key(|&e| self.elements[e].tag);
         let cell_of: HashMap<usize, usize> = cells_by_tag.iter().enumerate().map(|(c, &e)| (e, c)).collect();
@@ -447,6 +452,9 @@ impl Layout {
             return out;
         }
         for el in self.elements.iter().filter(|e| e.shape.dim() >= dim) {
+            if !corner_indices(el.shape, el.order).iter().any(|&c| side.contains(&el.nodes[c])) {
+                continue;
+            }
             let corners = corner_indices(Shape::of_dim(dim), el.order);
             for sub in sub_elements(el.shape, el.order, dim) {
                 if corners.iter().all(|&c| side.contains(&el.nodes[sub[c]])) {
@@ -544,26 +552,34 @@ struct SubElements {
 }
 
 impl SubElements {
-    fn new<const D: usize>(mesh: &CurvedMesh<D>) -> SubElements {
+    /// The edges and faces of `mesh` whose sorted corners are in
+    /// `wanted` (only those: a mesh of 10⁶ hexes has 1.8·10⁷ of them),
+    /// a boundary element's own orientation preferred.
+    fn new<const D: usize>(mesh: &CurvedMesh<D>, wanted: &std::collections::HashSet<Vec<usize>>) -> SubElements {
         let mut by_corners = HashMap::new();
-        let shape = Shape::of_dim(D);
-        for cell in &mesh.cells {
-            for dim in 1..D {
-                let corners = corner_indices(Shape::of_dim(dim), mesh.p);
-                for sub in sub_elements(shape, mesh.p, dim) {
-                    let nodes: Vec<usize> = sub.iter().map(|&i| cell[i]).collect();
-                    let mut key: Vec<usize> = corners.iter().map(|&c| nodes[c]).collect();
-                    key.sort_unstable();
-                    by_corners.entry(key).or_insert(nodes);
-                }
+        let mut keep = |key: Vec<usize>, nodes: &dyn Fn() -> Vec<usize>, prefer: bool| {
+            if wanted.contains(&key) && (prefer || !by_corners.contains_key(&key)) {
+                by_corners.insert(key, nodes());
             }
-        }
+        };
         for b in &mesh.boundary {
             let corners = corner_indices(Shape::of_dim(D - 1), mesh.p);
             let mut key: Vec<usize> = corners.iter().map(|&c| b.nodes[c]).collect();
             key.sort_unstable();
-            // the boundary element's own orientation is the one to keep
-            by_corners.insert(key, b.nodes.clone());
+            keep(key, &|| b.nodes.clone(), true);
+        }
+        let shape = Shape::of_dim(D);
+        let near: std::collections::HashSet<usize> = wanted.iter().flatten().copied().collect();
+        let cell_corners = corner_indices(shape, mesh.p);
+        for cell in mesh.cells.iter().filter(|c| cell_corners.iter().any(|&k| near.contains(&c[k]))) {
+            for dim in 1..D {
+                let corners = corner_indices(Shape::of_dim(dim), mesh.p);
+                for sub in sub_elements(shape, mesh.p, dim) {
+                    let mut key: Vec<usize> = corners.iter().map(|&c| cell[sub[c]]).collect();
+                    key.sort_unstable();
+                    keep(key, &|| sub.iter().map(|&i| cell[i]).collect(), false);
+                }
+            }
         }
         SubElements { by_corners, p: mesh.p }
     }
@@ -666,10 +682,14 @@ mod tests {
     #[test]
     fn a_face_is_found_in_the_orientation_asked_for() {
         let mesh = CurvedMesh::<3>::structured(2, crate::mesh::element::Spacing::Equispaced, [1, 1, 1], |x| x).unwrap();
-        let lookup = SubElements::new(&mesh);
         let cell = &mesh.cells[0];
         // the face x = 0 asked from corner (0,0,0) towards (0,0,1), then (0,1,0)
         let (a, b, c, d) = (cell[0], cell[18], cell[6], cell[24]);
+        let sorted = |mut k: Vec<usize>| {
+            k.sort_unstable();
+            k
+        };
+        let lookup = SubElements::new(&mesh, &[sorted(vec![a, b, c, d]), sorted(vec![a, cell[26]])].into_iter().collect());
         let face = lookup.find(&[a, b, c, d]).expect("a face of the cell");
         assert_eq!((face[0], face[2], face[6], face[8]), (a, b, c, d));
         // its middle node is the face's centre

@@ -333,3 +333,49 @@ fn mfem_reads_vtu_attributes() {
     h.write_vtu_with_attributes(&file, &[], &cells).unwrap();
     agrees(&h, &file, &cells);
 }
+
+/// `deformesh curve` to `.mesh` on the quarter disk (Gmsh's three blocks,
+/// tests/python/quarter_disk.py) and the ball octant: MFEM's area and
+/// volume equal ours (the Gauss rule on the same curve run's `.msh`) and
+/// the exact ones to within the sampled boundary error times the curved
+/// wall's length (π/2) or area (π/2); at p = 2 and 3 on the disk, p = 2
+/// on the ball.
+#[test]
+fn mfem_integrates_curved_quarter_disks_and_ball_octants() {
+    use deformesh::app::driver::{curve_file, CurveJob, OutputFormat};
+    let dir = tempfile::tempdir().unwrap();
+    let disk = dir.path().join("quarter_disk.msh");
+    crate::common::run_script("quarter_disk.py", &["6", disk.to_str().unwrap()]);
+    let ball = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ball_octant_hex.msh");
+    let arc = "[[group]]\nname = \"arc\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 1.0 }\n[[group]]\nname = \"axes\"\nkind = \"slip\"\n";
+    let sphere = "[[group]]\nname = \"sphere\"\nkind = \"curve\"\nshape = { type = \"sphere\", centre = [0.0, 0.0, 0.0], radius = 1.0 }\n\
+                  [[group]]\nname = \"plane_x0\"\nkind = \"slip\"\n[[group]]\nname = \"plane_y0\"\nkind = \"slip\"\n[[group]]\nname = \"plane_z0\"\nkind = \"slip\"\n";
+    // the ball at p = 2 only: at p = 3 its two runs take 15 s of the suite
+    for (input, geometry, exact, dim, orders) in [(&disk, arc, PI / 4.0, 2, &[2, 3][..]), (&ball, sphere, PI / 6.0, 3, &[2][..])] {
+        let g = dir.path().join("geometry.toml");
+        std::fs::write(&g, geometry).unwrap();
+        for &p in orders {
+            let run = |name: &str, format| {
+                let options = deformesh::highorder::curve::CurveOptions { order: p, ..Default::default() };
+                let job = CurveJob { input: input.clone(), geometry: g.clone(), output: dir.path().join(name), format, options, width: 200 };
+                curve_file(&job, |_| {}).unwrap()
+            };
+            let report = run(&format!("d{dim}p{p}.mesh"), OutputFormat::Mfem);
+            run(&format!("t{dim}p{p}.msh"), OutputFormat::Msh41);
+            let m = run_checker("check_mfem.py", &dir.path().join(format!("d{dim}p{p}.mesh")));
+            assert_eq!((m["order"].as_u64(), m["elements"].as_u64()), (Some(p as u64), Some(report.cells as u64)));
+            let theirs = m["volume"].as_f64().unwrap();
+            let file = dir.path().join(format!("t{dim}p{p}.msh"));
+            let ours: f64 = if dim == 2 {
+                let mesh = CurvedMesh::<2>::read_msh(&file).unwrap();
+                (0..mesh.cells.len()).map(|c| our_volume(&mesh, c)).sum()
+            } else {
+                let mesh = CurvedMesh::<3>::read_msh(&file).unwrap();
+                (0..mesh.cells.len()).map(|c| our_volume(&mesh, c)).sum()
+            };
+            assert!((theirs - ours).abs() <= 1e-12 * exact, "{dim}D p = {p}: MFEM {theirs} vs ours {ours}");
+            let bound = PI / 2.0 * report.quality.boundary_sample_distance;
+            assert!((theirs - exact).abs() <= bound, "{dim}D p = {p}: {theirs} vs exact {exact}, off by more than {bound:e}");
+        }
+    }
+}
