@@ -28,7 +28,7 @@ pub mod strain;
 pub use crate::geometry::ClosestPoint as BoundaryShape;
 use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
-use crate::solve::{Amg, CholeskySolver, ConjugateGradient, Jacobi, LaggedCholesky, SolveError, SpdSolver};
+use crate::solve::{Amg, CholeskySolver, ConjugateGradient, FactorLimits, FallbackTally, Fallbacks, FirstSolver, Jacobi, SolveError, SpdSolver};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -220,9 +220,10 @@ pub enum DeformError {
     /// The prescribed Jacobian failed.
     #[error(transparent)]
     Jacobian(#[from] JacobianError),
-    /// The linear solver failed.
-    #[error("the linear solver failed")]
-    Solve(#[from] SolveError),
+    /// The linear solver failed, every fallback included (the solver,
+    /// not the input).
+    #[error("{0}")]
+    Solve(SolverFailure),
     /// The assembly failed for a reason other than an inverted cell.
     #[error(transparent)]
     Lsfem(#[from] LsfemError),
@@ -247,6 +248,43 @@ pub enum DeformError {
     /// The starting mesh is invalid.
     #[error("the starting mesh has {} inverted cell(s), first {:?}", .0.len(), &.0[..(.0.len().min(10))])]
     InvalidStart(Vec<usize>),
+}
+
+/// A linear solve that failed every way tried: the last error and, in
+/// order, each try and how it ended.
+#[derive(Debug)]
+pub struct SolverFailure {
+    /// The last solver error (the iterations and residual reached, for CG).
+    pub error: SolveError,
+    /// What was tried, in order, and how each ended.
+    pub tried: Vec<String>,
+}
+
+impl std::fmt::Display for SolverFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the linear solver failed (the solver, not the input): {}", self.error)?;
+        if !self.tried.is_empty() {
+            write!(f, "; tried in turn: {}", self.tried.join("; "))?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SolverFailure {}
+
+impl From<SolveError> for SolverFailure {
+    fn from(e: SolveError) -> Self {
+        match e {
+            SolveError::Exhausted { last, tried } => SolverFailure { error: *last, tried },
+            error => SolverFailure { error, tried: Vec::new() },
+        }
+    }
+}
+
+impl From<SolveError> for DeformError {
+    fn from(e: SolveError) -> Self {
+        DeformError::Solve(e.into())
+    }
 }
 
 /// Timings and counters of a run.
@@ -276,6 +314,9 @@ pub struct RunStats {
     pub setups: usize,
     /// Time building them (part of `factor`).
     pub setup: Duration,
+    /// Steps retaken with half the step because a solve failed every
+    /// other way ([`Deformation::step`]).
+    pub solver_retakes: usize,
 }
 
 /// What the linear solves of a run cost, for `report.json`.
@@ -301,6 +342,8 @@ pub struct SolverReport {
     pub factor_s: f64,
     /// Seconds in the solves.
     pub solve_s: f64,
+    /// What solves that did not converge turned to (all 0 when none failed).
+    pub fallbacks: FallbackTally,
 }
 
 /// Which sparse solver Algorithm 1 uses.
@@ -340,8 +383,10 @@ pub enum SolverChoice {
 pub const AUTO_AMG_UNKNOWNS: [usize; 2] = [200_000, 20_000];
 
 /// Up to these many unknowns `auto`'s multigrid CG turns to CG on a
-/// Cholesky factor when it does not converge
-/// ([`crate::solve::MultigridOrFactor`]); above, the failure is reported.
+/// Cholesky factor when it is slow ([`crate::solve::Fallbacks`]), and
+/// `curve` starts with the factor on thin cells; a solve that fails turns
+/// to the factor up to [`DeformOptions::factor_limit`] unknowns if it
+/// fits.
 pub const AUTO_FACTOR_LIMIT: usize = 400_000;
 
 /// `curve`'s `auto` starts Algorithm 2 with CG on a Cholesky factor (up
@@ -355,43 +400,40 @@ pub const AUTO_FACTOR_LIMIT: usize = 400_000;
 pub const AUTO_FACTOR_ASPECT: f64 = 100.0;
 
 /// A multigrid solve of more iterations than this makes `auto` turn to
-/// the factor ([`crate::solve::MultigridOrFactor`]) from the next step
+/// the factor ([`crate::solve::Fallbacks`]) from the next step
 /// on, and one not converged in twice as many from this solve on: 7–14
 /// is usual, 130 to over 1,000 on a 1e-5 hex layer at p = 3.
 pub const AUTO_SLOW_MULTIGRID: usize = 100;
 
 impl SolverChoice {
-    /// The choice made for a `dim`-D system of `unknowns`: `Auto` stays
-    /// `Auto` (the multigrid, with its fallback) only when large.
-    pub fn resolved(self, dim: usize, unknowns: usize) -> SolverChoice {
+    /// The choice made for a `dim`-D system of `unknowns` when factors
+    /// of up to `factor_limit` unknowns are allowed
+    /// ([`DeformOptions::factor_limit`]): `Auto` stays `Auto` (the
+    /// multigrid, with its fallbacks) when large, or when no factor of this
+    /// size is allowed.
+    pub fn resolved(self, dim: usize, unknowns: usize, factor_limit: usize) -> SolverChoice {
         match self {
-            SolverChoice::Auto if unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)] => SolverChoice::Auto,
+            SolverChoice::Auto if unknowns > AUTO_AMG_UNKNOWNS[usize::from(dim == 3)] || unknowns > factor_limit => SolverChoice::Auto,
             SolverChoice::Auto => SolverChoice::CholeskyCg,
             chosen => chosen,
         }
     }
 
-    /// The solver this choice makes for a `dim`-D system of `unknowns`.
-    pub fn make(self, dim: usize, unknowns: usize, tolerance: f64) -> Box<dyn SpdSolver> {
-        match self.resolved(dim, unknowns) {
+    /// The solver this choice makes for a `dim`-D system of `unknowns`
+    /// with `options`' tolerance, iteration cap and factor limits. Every
+    /// iterative choice comes with the fallbacks of [`Fallbacks`]; plain
+    /// Cholesky has none (it is exact, and fails only on a matrix that is
+    /// not positive definite).
+    pub fn make(self, dim: usize, unknowns: usize, options: &DeformOptions) -> Box<dyn SpdSolver> {
+        let tolerance = options.tolerance;
+        let cap = options.max_iterations;
+        let limits = FactorLimits { unknowns: options.factor_limit, bytes: options.factor_bytes };
+        match self.resolved(dim, unknowns, options.factor_limit) {
             SolverChoice::Cholesky => Box::new(CholeskySolver::new()),
-            SolverChoice::Cg => {
-                let mut cg = ConjugateGradient::new(Jacobi::default());
-                cg.tolerance = tolerance;
-                Box::new(cg)
-            }
-            SolverChoice::CholeskyCg => {
-                let mut cg = ConjugateGradient::new(LaggedCholesky::default());
-                cg.tolerance = tolerance;
-                Box::new(cg)
-            }
-            SolverChoice::Amg => {
-                let mut cg = ConjugateGradient::new(Amg::default());
-                cg.max_iterations = 1000;
-                cg.tolerance = tolerance;
-                Box::new(cg)
-            }
-            SolverChoice::Auto => Box::new(crate::solve::MultigridOrFactor::new(2 * AUTO_SLOW_MULTIGRID, tolerance, AUTO_SLOW_MULTIGRID, AUTO_FACTOR_LIMIT)),
+            SolverChoice::Cg => Box::new(Fallbacks::new(capped(Jacobi::default(), tolerance, cap.unwrap_or(20_000)), FirstSolver::Jacobi, tolerance, cap, limits)),
+            SolverChoice::CholeskyCg => Box::new(Fallbacks::factor_first(tolerance, cap, limits)),
+            SolverChoice::Amg => Box::new(Fallbacks::new(capped(Amg::default(), tolerance, cap.unwrap_or(1000)), FirstSolver::Multigrid, tolerance, cap, limits)),
+            SolverChoice::Auto => Box::new(Fallbacks::auto_multigrid(cap.unwrap_or(2 * AUTO_SLOW_MULTIGRID), tolerance, AUTO_SLOW_MULTIGRID, AUTO_FACTOR_LIMIT, limits)),
         }
     }
 }
@@ -416,6 +458,38 @@ pub struct DeformOptions {
     /// the nominal step 1/`steps` stays the largest. None: fixed steps
     /// (halved only on inversion).
     pub max_strain: Option<f64>,
+    /// Most iterations of one CG solve, for every iterative solver (the
+    /// first one and CG on a fallback factor). None: each solver's own
+    /// (20,000 for Jacobi and lagged-factor CG, 1,000 for `amg`, 200 for
+    /// `auto`'s multigrid). A test's knob: with 1 nearly every solve fails.
+    pub max_iterations: Option<usize>,
+    /// Most unknowns of a system for which a Cholesky factor is built when
+    /// a solve fails (0: never; `auto` then never picks a factor either).
+    /// Default [`FALLBACK_FACTOR_LIMIT`]; the factor's size from its
+    /// symbolic analysis must also stay within `factor_bytes`.
+    pub factor_limit: usize,
+    /// Most bytes of a fallback factor's values; None:
+    /// [`crate::solve::default_factor_bytes`] (a quarter of the memory
+    /// available).
+    pub factor_bytes: Option<u64>,
+}
+
+/// Up to these many unknowns a solve that failed may turn to a Cholesky
+/// factor ([`DeformOptions::factor_limit`]), if its symbolic analysis
+/// says it fits ([`DeformOptions::factor_bytes`]). The bound only keeps
+/// the symbolic analysis itself (AMD and the column counts, a few seconds
+/// and some 100 MB at this size) from being tried where no factor could
+/// fit: in 3D the factor of the 101k-unknown quarter ball peaked at 2.2 GB
+/// and about 4 GB at 300k unknowns on the thin cylinder layer, growing
+/// faster than linearly.
+pub const FALLBACK_FACTOR_LIMIT: usize = 2_000_000;
+
+/// CG with `precond`, stopping at `tolerance` within `max_iterations`.
+fn capped<P: crate::solve::Preconditioner + 'static>(precond: P, tolerance: f64, max_iterations: usize) -> Box<dyn SpdSolver> {
+    let mut cg = ConjugateGradient::new(precond);
+    cg.tolerance = tolerance;
+    cg.max_iterations = max_iterations;
+    Box::new(cg)
 }
 
 impl Default for DeformOptions {
@@ -428,6 +502,9 @@ impl Default for DeformOptions {
             solver: SolverChoice::Auto,
             tolerance: crate::solve::DEFAULT_TOLERANCE,
             max_strain: None,
+            max_iterations: None,
+            factor_limit: FALLBACK_FACTOR_LIMIT,
+            factor_bytes: None,
         }
     }
 }
@@ -467,6 +544,33 @@ pub struct Deformation<M: Q1Mesh<D, N> = crate::mesh::QuadMesh, const D: usize =
     x: Vec<f64>,
     f_nodes: Vec<f64>,
     saved_state: <M::Boundary as BoundaryModel<D>>::State,
+    // the last accepted step's start (nodes, boundary state, velocity, t)
+    // and size, kept by rotating buffers: a solve that fails at the end of
+    // that step retakes it smaller from there
+    back: Back<<M::Boundary as BoundaryModel<D>>::State, D>,
+}
+
+/// Where the last accepted step started, and what solver failures have
+/// cut ([`Deformation::step`]).
+struct Back<S, const D: usize> {
+    nodes: Vec<[f64; D]>,
+    state: S,
+    k1: Vec<[f64; D]>,
+    t: f64,
+    h: f64,
+    /// Whether the fields above hold a step that may be retaken.
+    valid: bool,
+    /// The largest step while a solver failure is being stepped around.
+    cap: f64,
+    /// The pseudo-time of the first solve that failed (the cap holds
+    /// until the run has passed it).
+    failed_at: f64,
+    /// Steps retaken since the run last passed `failed_at`.
+    retakes: usize,
+    /// After a step retaken smaller was taken: the solver's fallbacks
+    /// then; if none was needed since, a smaller step is what solved the
+    /// last failure.
+    solved: Option<usize>,
 }
 
 /// Algorithm 1 on a hexahedral mesh.
@@ -477,7 +581,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// part can reach its target, builds the pattern and analyses it.
     pub fn new(mesh: M, parts: Vec<BoundaryPart<D>>, field: JacobianField, options: DeformOptions) -> Result<Self, DeformError> {
         // D unknowns per node bound the system size from above
-        let solver = options.solver.make(D, D * mesh.nodes().len(), options.tolerance);
+        let solver = options.solver.make(D, D * mesh.nodes().len(), &options);
         Self::with_solver(mesh, parts, field, options, solver)
     }
 
@@ -531,6 +635,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             next: mesh.nodes().to_vec(),
             saved_state: boundary.state().clone(),
             initial_state: boundary.state().clone(),
+            back: Back { nodes: mesh.nodes().to_vec(), state: boundary.state().clone(), k1: vec![[0.0; D]; n], t: 0.0, h: 0.0, valid: false, cap: f64::INFINITY, failed_at: 0.0, retakes: 0, solved: None },
             mesh,
             boundary,
             field,
@@ -547,6 +652,9 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.t = 0.0;
         self.k1_current = false;
         self.next_step = f64::INFINITY;
+        self.back.valid = false;
+        self.back.cap = f64::INFINITY;
+        self.back.retakes = 0;
     }
 
     /// The boundary parts.
@@ -584,7 +692,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     }
 
     /// Whether `auto`'s multigrid turned to a Cholesky factor
-    /// ([`crate::solve::MultigridOrFactor`]): a later run on this mesh
+    /// ([`crate::solve::Fallbacks`]): a later run on this mesh
     /// should start with the factor.
     pub fn solver_fell_back(&self) -> bool {
         self.solver.info().fell_back
@@ -603,6 +711,14 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             setup_s: s.setup.as_secs_f64(),
             factor_s: s.factor.as_secs_f64(),
             solve_s: s.solve.as_secs_f64(),
+            fallbacks: {
+                let mut f = self.solver.fallbacks();
+                f.smaller_steps = s.solver_retakes;
+                if self.back.solved == Some(fallback_count(&f)) {
+                    f.solved_by = Some("a smaller step".into());
+                }
+                f
+            },
         }
     }
 
@@ -634,6 +750,8 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
                 if stops.peek().is_some() {
                     stops.next();
                     on_stop(self);
+                    // a stop was seen: a failed solve is not stepped back across it
+                    self.back.valid = false;
                 }
             }
             on_step(self);
@@ -669,32 +787,104 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// ([`DeformOptions::max_strain`]), then halved until no cell inverts
     /// and, with the step control, until no corner's Jacobian changed by
     /// more than it allows (on the last try only validity counts).
+    ///
+    /// A solve that fails every way its solver knows ([`Fallbacks`]) is
+    /// met with a smaller step, as an inversion is: where the failing
+    /// system depends on the step (Heun's second stage) this step is
+    /// halved; the system at the step's start does not, so the last
+    /// accepted step is retaken from its start with half its size (and
+    /// the steps stay at most that until the run has passed the failure),
+    /// up to `max_halvings` times. Only then does the run end with
+    /// [`DeformError::Solve`].
     pub fn step(&mut self, h: f64) -> Result<(), DeformError> {
-        let mut h = h;
+        let mut h = h.min(self.back.cap);
+        let mut halved_for_solver = 0;
         for attempt in 0..=self.options.max_halvings {
             let control = attempt < self.options.max_halvings;
             match self.try_step(h, control)? {
-                Ok(_) => {
+                Attempt::Taken => {
                     self.stats.steps += 1;
+                    if self.t > self.back.failed_at + 1e-12 {
+                        // past the failure: the steps may grow again
+                        self.back.cap = f64::INFINITY;
+                        self.back.retakes = 0;
+                    }
+                    if halved_for_solver > 0 {
+                        self.back.solved = Some(fallback_count(&self.solver.fallbacks()));
+                    }
                     return Ok(());
                 }
-                Err((bad, tried)) if attempt == self.options.max_halvings => {
+                Attempt::Refused(bad, tried) if attempt == self.options.max_halvings => {
                     return Err(DeformError::Tangled { t: self.t, dt: tried, cells: bad });
                 }
-                Err((bad, tried)) => {
+                Attempt::Refused(bad, tried) => {
                     self.stats.halved += 1;
                     h = tried * if bad.is_empty() { self.strain_factor().min(0.5) } else { 0.5 };
+                }
+                Attempt::SolveFailed(e, true, tried) if attempt < self.options.max_halvings => {
+                    tracing::info!("a solve at the second stage of a step of {tried:.3e} failed ({e}): half the step");
+                    self.stats.halved += 1;
+                    self.stats.solver_retakes += 1;
+                    halved_for_solver += 1;
+                    h = 0.5 * tried;
+                }
+                Attempt::SolveFailed(e, stage, tried) => {
+                    let retake = !stage && self.back.valid && self.back.retakes < self.options.max_halvings;
+                    if !retake {
+                        let mut failure = SolverFailure::from(e);
+                        failure.tried.push(self.no_smaller_step(stage, tried));
+                        return Err(DeformError::Solve(failure));
+                    }
+                    // back to the last step's start, to retake it smaller
+                    if self.back.retakes == 0 {
+                        self.back.failed_at = self.t;
+                    }
+                    self.back.retakes += 1;
+                    self.back.cap = self.back.cap.min(self.back.h) * 0.5;
+                    tracing::info!("the solve at t = {:.4} failed ({e}): the step from t = {:.4} again with {:.3e}", self.t, self.back.t, self.back.cap);
+                    self.step_back();
+                    self.stats.halved += 1;
+                    self.stats.solver_retakes += 1;
+                    halved_for_solver += 1;
+                    h = self.back.cap;
                 }
             }
         }
         unreachable!("the loop returns on its last attempt")
     }
 
-    /// Tries a step of at most `h`; on success updates the state and
-    /// returns the step taken, else leaves the state untouched and returns
-    /// the cells that would invert (none if only the step control refused
-    /// it) with the step tried.
-    fn try_step(&mut self, h: f64, control: bool) -> Result<Result<f64, (Vec<usize>, f64)>, DeformError> {
+    /// Why no smaller step was tried after a failed solve, for the message.
+    fn no_smaller_step(&self, stage: bool, tried: f64) -> String {
+        let halvings = self.options.max_halvings;
+        if stage {
+            format!("a smaller step: halved {halvings} times, down to {tried:.3e}, and still failing")
+        } else if self.back.retakes > 0 {
+            format!("a smaller step: the steps before t = {:.4} retaken {} times with half the step, down to {:.3e}, and the solve still failing", self.back.failed_at, self.back.retakes, self.back.cap)
+        } else if self.t == 0.0 {
+            "a smaller step: none to take, as the failing solve is the run's first, at t = 0, which no step size changes".into()
+        } else {
+            format!("a smaller step: none to take at t = {:.4}, as the failing system is the one at the step's start, which its size does not change, and there is no earlier step to retake (the run started or stopped here)", self.t)
+        }
+    }
+
+    /// Restores the start of the last accepted step (its nodes, boundary
+    /// state and velocity): that step is to be retaken smaller.
+    fn step_back(&mut self) {
+        std::mem::swap(self.mesh.nodes_mut(), &mut self.back.nodes);
+        self.boundary.state_mut().clone_from(&self.back.state);
+        self.k1.copy_from_slice(&self.back.k1);
+        self.k1_current = true;
+        self.t = self.back.t;
+        self.next_step = f64::INFINITY;
+        // one step back only: the nodes kept are now the failing ones
+        self.back.valid = false;
+    }
+
+    /// Tries a step of at most `h`; on success updates the state (keeping
+    /// the step's start in `back`), else leaves the state untouched and
+    /// returns the cells that would invert (none if only the step control
+    /// refused it), or the solve that failed, with the step tried.
+    fn try_step(&mut self, h: f64, control: bool) -> Result<Attempt, DeformError> {
         self.saved_state.clone_from(self.boundary.state());
         let nodes = std::mem::take(self.mesh.nodes_mut());
         let result = self.advance(&nodes, self.t, h);
@@ -704,14 +894,21 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
                 let bad = self.mesh.invalid_cells(&self.next);
                 if bad.is_empty() && !(self.too_strained() && control) {
                     std::mem::swap(self.mesh.nodes_mut(), &mut self.next);
+                    // keep this step's start by rotating buffers, no copy:
+                    // `next` and `saved_state` are overwritten before use
+                    std::mem::swap(&mut self.next, &mut self.back.nodes);
+                    std::mem::swap(&mut self.saved_state, &mut self.back.state);
+                    std::mem::swap(&mut self.k1, &mut self.back.k1);
+                    (self.back.t, self.back.h, self.back.valid) = (self.t, h, true);
                     self.t += h;
                     self.next_step = h * self.strain_factor().clamp(1.0, 2.0);
                     self.k1_current = false;
-                    return Ok(Ok(h));
+                    return Ok(Attempt::Taken);
                 }
-                Ok(Err((bad, h)))
+                Ok(Attempt::Refused(bad, h))
             }
-            Err(StepFailure::Inverted(cell, h)) => Ok(Err((vec![cell], h))),
+            Err(StepFailure::Inverted(cell, h)) => Ok(Attempt::Refused(vec![cell], h)),
+            Err(StepFailure::Solve(e, stage)) => Ok(Attempt::SolveFailed(e, stage, h)),
             Err(StepFailure::Fatal(e)) => Err(e),
         };
         // the boundary parameters moved with the rejected step: restore them
@@ -767,7 +964,10 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             stage.copy_from_slice(&self.next);
             let r = self.node_velocity(&stage, t + h);
             self.stage = stage;
-            r.map_err(|e| e.at(h))?;
+            r.map_err(|e| match e {
+                StepFailure::Solve(e, _) => StepFailure::Solve(e, true),
+                e => e.at(h),
+            })?;
             for ((o, x), (a, b)) in self.next.iter_mut().zip(nodes).zip(self.k1.iter().zip(&self.u)) {
                 *o = std::array::from_fn(|i| x[i] + 0.5 * h * (a[i] + b[i]));
             }
@@ -798,10 +998,10 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             })?;
         self.stats.assembly += t0.elapsed();
         let t1 = Instant::now();
-        self.solver.factor(self.system.matrix(), self.system.structure()).map_err(DeformError::from)?;
+        self.solver.factor(self.system.matrix(), self.system.structure()).map_err(solve_failure)?;
         let t2 = Instant::now();
         self.x.copy_from_slice(&self.system.rhs);
-        self.solver.solve_in_place(self.system.matrix(), &mut self.x).map_err(DeformError::from)?;
+        self.solver.solve_in_place(self.system.matrix(), &mut self.x).map_err(solve_failure)?;
         self.stats.factor += t2 - t1;
         self.stats.solve += t2.elapsed();
         self.stats.solves += 1;
@@ -826,11 +1026,41 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     }
 }
 
+/// How often a solver turned to a fallback.
+fn fallback_count(f: &FallbackTally) -> usize {
+    f.rebuilt + f.factor + f.direct
+}
+
+/// A solver error as a step's failure: one a smaller step may avoid, or
+/// (a malformed pattern, a solver used out of order) a fatal one.
+fn solve_failure(e: SolveError) -> StepFailure {
+    match e {
+        SolveError::Pattern(_) | SolveError::Order(_) | SolveError::Symbolic(_) => StepFailure::Fatal(e.into()),
+        e => StepFailure::Solve(e, false),
+    }
+}
+
+/// How one try of a step ended.
+enum Attempt {
+    /// Taken.
+    Taken,
+    /// Refused with this step: the cells that would invert (none if only
+    /// the step control refused it).
+    Refused(Vec<usize>, f64),
+    /// A solve failed every way its solver knows: the error, whether in
+    /// a later stage of the step (whose system depends on the step), and
+    /// the step tried.
+    SolveFailed(SolveError, bool, f64),
+}
+
 /// Why a step attempt failed.
 enum StepFailure {
     /// A cell inverted during a stage of a step of this size: retry with
     /// a smaller step.
     Inverted(usize, f64),
+    /// A solve failed every way the solver knows (in a later stage:
+    /// true).
+    Solve(SolveError, bool),
     /// Anything else: give up.
     Fatal(DeformError),
 }

@@ -529,7 +529,7 @@ where
     let watch = Watch::new(&sub, &parts2, opts.spacing)?;
     let aspect = largest_aspect(coarse.nodes(), coarse.cells());
     let unknowns = D * sub.fine.nodes().len();
-    let factor = starts_with_factor::<D>(opts.flow.solver, aspect, unknowns);
+    let factor = starts_with_factor::<D>(&opts.flow, aspect, unknowns);
     tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns: auto starts with the factor: {factor}");
     let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
     let mut attempts = 0;
@@ -613,8 +613,10 @@ where
 /// thinner than [`AUTO_FACTOR_ASPECT`] the multigrid needs 10–100× its
 /// iterations, and `auto` turns to the factor after a failed solve anyway
 /// when the system is small enough for it.
-fn starts_with_factor<const D: usize>(solver: SolverChoice, aspect: f64, unknowns: usize) -> bool {
-    solver.resolved(D, unknowns) == SolverChoice::Auto && aspect > AUTO_FACTOR_ASPECT && unknowns <= AUTO_FACTOR_LIMIT
+/// Never beyond the factor limit of the options
+/// ([`DeformOptions::factor_limit`]).
+fn starts_with_factor<const D: usize>(flow: &DeformOptions, aspect: f64, unknowns: usize) -> bool {
+    flow.solver.resolved(D, unknowns, flow.factor_limit) == SolverChoice::Auto && aspect > AUTO_FACTOR_ASPECT && unknowns <= AUTO_FACTOR_LIMIT.min(flow.factor_limit)
 }
 
 /// The largest ratio, over the cells, of the longest to the shortest
@@ -1075,9 +1077,12 @@ mod tests {
 
     #[test]
     fn a_solver_failure_says_why() {
-        let e = CurveError::from(DeformError::Solve(crate::solve::SolveError::NoConvergence(1000)));
+        let e = CurveError::from(DeformError::from(crate::solve::SolveError::NoConvergence { iterations: 1000, residual: 3.5e-4, tolerance: 1e-7 }));
         let chain = format!("{:#}", anyhow::Error::from(e));
-        assert!(chain.ends_with("the linear solver failed: conjugate gradients did not converge in 1000 iterations"), "{chain}");
+        assert!(
+            chain.ends_with("the linear solver failed (the solver, not the input): conjugate gradients did not converge in 1000 iterations (relative residual 3.50e-4 reached, 1e-7 wanted)"),
+            "{chain}"
+        );
         assert_eq!(chain.matches("converge").count(), 1, "{chain}");
     }
 }

@@ -106,6 +106,18 @@ impl<P: Preconditioner> ConjugateGradient<P> {
         self.info.iterations
     }
 
+    /// The preconditioner.
+    pub(super) fn precond_mut(&mut self) -> &mut P {
+        &mut self.precond
+    }
+
+    /// Takes `x` as the solution of the last solve (the next one starts
+    /// from it), with no iteration: for a solution found otherwise.
+    pub(super) fn accept(&mut self, x: &[f64]) {
+        self.previous.copy_from_slice(x);
+        self.info.iterations = 0;
+    }
+
     fn iterate(&mut self, a: &Csr, b: &[f64]) -> Result<usize, SolveError> {
         let norm_b = dot(b, b).sqrt();
         let x = &mut self.previous;
@@ -135,7 +147,8 @@ impl<P: Preconditioner> ConjugateGradient<P> {
             rz = rz_new;
             self.p.par_iter_mut().zip(&self.z).with_min_len(4096).for_each(|(p, z)| *p = z + beta * *p);
         }
-        Err(SolveError::NoConvergence(self.max_iterations))
+        let residual = dot(&self.r, &self.r).sqrt() / norm_b;
+        Err(SolveError::NoConvergence { iterations: self.max_iterations, residual, tolerance: self.tolerance })
     }
 }
 
@@ -169,6 +182,7 @@ impl<P: Preconditioner> SpdSolver for ConjugateGradient<P> {
             self.info.iterations = 0;
             return Ok(());
         }
+        self.info.retried = false;
         let iterations = match self.iterate(a, rhs) {
             Ok(k) => k,
             Err(e) => {
@@ -178,6 +192,7 @@ impl<P: Preconditioner> SpdSolver for ConjugateGradient<P> {
                     return Err(e);
                 }
                 self.info.rebuilt = true;
+                self.info.retried = true;
                 self.previous.iter_mut().for_each(|v| *v = 0.0);
                 self.iterate(a, rhs)?
             }

@@ -50,6 +50,12 @@ impl CholeskySolver {
         }
     }
 
+    /// Stored entries of the factor L, from the symbolic analysis (0
+    /// before `analyze`): 8 bytes each, what the factor costs in memory.
+    pub fn factor_entries(&self) -> usize {
+        self.symbolic.as_ref().map_or(0, |s| s.len_val())
+    }
+
     fn lower_ref(&self) -> SymbolicSparseColMatRef<'_, usize> {
         SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
     }
@@ -81,12 +87,12 @@ impl SpdSolver for CholeskySolver {
         self.lower = vec![0.0; self.source.len()];
         let symbolic = factorize_symbolic_cholesky(self.lower_ref(), Side::Lower, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
             .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, self.par),
-        ]);
-        self.l_values = vec![0.0; symbolic.len_val()];
-        self.work = MemBuffer::new(req);
+        // the factor's values and scratch are allocated by the first
+        // `factor`, not here: a caller may look at `factor_entries` first
+        // and find that they would not fit (the 1.3M-unknown thin hex
+        // layer asked for 27 GB)
+        self.l_values = Vec::new();
+        self.work = MemBuffer::new(StackReq::EMPTY);
         self.symbolic = Some(symbolic);
         self.factored = false;
         Ok(())
@@ -104,6 +110,14 @@ impl SpdSolver for CholeskySolver {
         }
         self.factored = false;
         let symbolic = self.symbolic.as_ref().ok_or(SolveError::Order("analyze"))?;
+        if self.l_values.len() != symbolic.len_val() {
+            let req = StackReq::any_of(&[
+                symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
+                symbolic.solve_in_place_scratch::<f64>(1, self.par),
+            ]);
+            self.l_values = vec![0.0; symbolic.len_val()];
+            self.work = MemBuffer::new(req);
+        }
         let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
         let lower = SparseColMatRef::new(pattern, &self.lower);
         symbolic
@@ -167,6 +181,24 @@ impl Default for LaggedCholesky {
 }
 
 impl LaggedCholesky {
+    /// Analyses `a`'s pattern now (otherwise the first set-up does) and
+    /// returns the entries its factor will hold.
+    pub(super) fn analyze(&mut self, a: &Csr) -> Result<usize, SolveError> {
+        self.chol.analyze(a)?;
+        Ok(self.chol.factor_entries())
+    }
+
+    /// Overwrites `rhs` with the solution by the factor alone: exact when
+    /// the factor is of this very matrix ([`LaggedCholesky::is_fresh`]).
+    pub(super) fn direct(&mut self, a: &Csr, rhs: &mut [f64]) -> Result<(), SolveError> {
+        self.chol.solve_in_place(a, rhs)
+    }
+
+    /// Whether the factor is of the matrix the last set-up saw.
+    pub(super) fn is_fresh(&self) -> bool {
+        self.fresh
+    }
+
     fn refactor(&mut self, a: &Csr) -> Result<(), SolveError> {
         if self.chol.n != a.nrows || self.chol.symbolic.is_none() {
             self.chol.analyze(a)?;

@@ -43,8 +43,31 @@ pub enum SolveError {
     #[error("matrix is not positive definite (a constraint may be missing)")]
     NotPositiveDefinite,
     /// An iterative solver did not reach its tolerance.
-    #[error("conjugate gradients did not converge in {0} iterations")]
-    NoConvergence(usize),
+    #[error("conjugate gradients did not converge in {} (relative residual {residual:.2e} reached, {tolerance:.0e} wanted)", iterations_text(*.iterations))]
+    NoConvergence {
+        /// The iterations done (the cap).
+        iterations: usize,
+        /// The relative residual reached, ‖b − A x‖ / ‖b‖.
+        residual: f64,
+        /// The relative residual wanted.
+        tolerance: f64,
+    },
+    /// A solve failed every way [`Fallbacks`] knows.
+    #[error("{last}; tried in turn: {}", .tried.join("; "))]
+    Exhausted {
+        /// The last solver's error.
+        last: Box<SolveError>,
+        /// Each try and how it ended, in order.
+        tried: Vec<String>,
+    },
+}
+
+fn iterations_text(n: usize) -> String {
+    if n == 1 {
+        "1 iteration".into()
+    } else {
+        format!("{n} iterations")
+    }
 }
 
 /// How the unknowns group into nodes, and the vectors the operator nearly
@@ -69,8 +92,11 @@ pub struct SolveInfo {
     pub rebuilt: bool,
     /// Time of the last `factor` spent building a hierarchy.
     pub setup: Duration,
-    /// A solver that can turn to another ([`MultigridOrFactor`]) has.
+    /// A solver that can turn to another ([`Fallbacks`]) has.
     pub fell_back: bool,
+    /// The last solve failed first and was tried again on a rebuilt
+    /// preconditioner ([`Preconditioner::rebuild_if_stale`]).
+    pub retried: bool,
 }
 
 /// A sparse SPD solver: analyse a pattern once, factor and solve many times.
@@ -87,99 +113,305 @@ pub trait SpdSolver: Send {
     fn info(&self) -> SolveInfo {
         SolveInfo::default()
     }
+    /// What failed solves turned to so far ([`Fallbacks`]).
+    fn fallbacks(&self) -> FallbackTally {
+        FallbackTally::default()
+    }
 }
 
-/// Multigrid-preconditioned CG that turns to CG on a lagged Cholesky
-/// factor for the rest of the run when the multigrid struggles: a solve
-/// that does not converge, or needs more than `slow` iterations (the
-/// factor is then built before the next step). What `auto` chooses for
-/// large systems. Why: the multigrid takes 7–14 iterations on the
-/// benchmark meshes, but on cells of aspect ratio 10⁴–10⁵ (a 1e-5
-/// boundary layer of hexes at p = 3) it needed 130 to over 1,000 a solve,
-/// while a factor stays exact. The factor is only tried up to
-/// `factor_limit` unknowns, as its fill grows fast in 3D (about 4 GB at
-/// 300k unknowns on such a layer).
-pub struct MultigridOrFactor {
-    multigrid: ConjugateGradient<Amg>,
+/// What the solves of a run turned to when one did not converge
+/// ([`Fallbacks`]); in `report.json` under `solver.fallbacks`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FallbackTally {
+    /// Failed solves retried on a rebuilt preconditioner: a multigrid
+    /// hierarchy built anew (with safe smoother bounds if it had just been
+    /// built), or a lagged Cholesky factor of this very matrix.
+    pub rebuilt: usize,
+    /// Failed solves handed to a fresh Cholesky factor (CG on it); the
+    /// factor then serves the rest of the run.
+    pub factor: usize,
+    /// Solves done by a fresh factor alone, CG on it not having converged
+    /// within its cap.
+    pub direct: usize,
+    /// Steps retaken with half the step after a solve failed every other
+    /// way (the deformation's step control; 0 here).
+    pub smaller_steps: usize,
+    /// What finally solved the last solve that needed a fallback.
+    pub solved_by: Option<String>,
+}
+
+/// When a failed solve may turn to a Cholesky factor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FactorLimits {
+    /// Most unknowns (0: never).
+    pub unknowns: usize,
+    /// Most bytes of the factor's values as its symbolic analysis counts
+    /// them; None: [`default_factor_bytes`].
+    pub bytes: Option<u64>,
+}
+
+/// Without an explicit limit, a fallback factor may hold a quarter of the
+/// memory available when it is tried (`MemAvailable` of /proc/meminfo),
+/// or 4 GB where that is not known. A quarter, because a numeric
+/// factorisation needs scratch beyond L and the run keeps its mesh,
+/// matrix and multigrid meanwhile (see docs/solvers.md for the measured
+/// ratio of peak to L).
+pub fn default_factor_bytes() -> u64 {
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        let line = t.lines().find(|l| l.starts_with("MemAvailable:"))?;
+        let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kb * 1024)
+    });
+    available.map_or(4 << 30, |b| b / 4)
+}
+
+/// Which solver a [`Fallbacks`] tries first: only for its name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FirstSolver {
+    /// `auto`'s multigrid CG, which also turns to the factor when slow.
+    AutoMultigrid,
+    /// Multigrid CG chosen by name.
+    Multigrid,
+    /// Jacobi CG.
+    Jacobi,
+    /// CG on a lagged Cholesky factor from the start.
+    Factor,
+}
+
+/// A solver with fallbacks for a solve that does not converge, tried in
+/// this order:
+///
+/// 1. the first solver's own retry on a rebuilt preconditioner (inside
+///    [`ConjugateGradient`]: a kept multigrid hierarchy is built anew, one
+///    just built is rebuilt with safe smoother bounds; a lagged factor is
+///    factored anew for this matrix);
+/// 2. CG on a fresh Cholesky factor of this matrix, if the system has at
+///    most [`FactorLimits::unknowns`] unknowns and the factor, by its
+///    symbolic analysis, at most [`FactorLimits::bytes`]; the factor then
+///    serves the rest of the run as a lagged factor;
+/// 3. if CG on a fresh factor still does not converge within its cap, the
+///    factor's direct solve.
+///
+/// Only then does the solve fail, with [`SolveError::Exhausted`] naming
+/// each try; the deformation may still retake a smaller step
+/// ([`crate::deform::Deformation::step`]).
+///
+/// As `auto`'s solver for large systems ([`FirstSolver::AutoMultigrid`])
+/// it also turns to the factor after a solve of more than `slow`
+/// iterations, up to `switch_limit` unknowns: the multigrid takes 7–14
+/// iterations on the benchmark meshes, but on cells of aspect ratio
+/// 10⁴–10⁵ (a 1e-5 boundary layer of hexes at p = 3) it needed 130 to over
+/// 1,000 a solve, while a factor stays exact.
+pub struct Fallbacks {
+    first: Option<Box<dyn SpdSolver>>,
     factor: Option<ConjugateGradient<LaggedCholesky>>,
+    kind: FirstSolver,
     tolerance: f64,
-    slow: usize,
-    factor_limit: usize,
+    max_iterations: Option<usize>,
+    slow: Option<usize>,
+    switch_limit: usize,
+    limits: FactorLimits,
     switch: bool,
+    switched: bool,
+    tally: FallbackTally,
 }
 
-impl MultigridOrFactor {
-    /// Multigrid CG with at most `max_iterations` a solve, relative
-    /// residual `tolerance`; the factor after a solve of more than `slow`
-    /// iterations or none converged, up to `factor_limit` unknowns.
-    pub fn new(max_iterations: usize, tolerance: f64, slow: usize, factor_limit: usize) -> Self {
+impl Fallbacks {
+    /// `first` (an iterative solver of the given kind) with the fallbacks;
+    /// the factor's CG stops at `tolerance` within `max_iterations` (None:
+    /// its default).
+    pub fn new(first: Box<dyn SpdSolver>, kind: FirstSolver, tolerance: f64, max_iterations: Option<usize>, limits: FactorLimits) -> Self {
+        Fallbacks { first: Some(first), factor: None, kind, tolerance, max_iterations, slow: None, switch_limit: 0, limits, switch: false, switched: false, tally: FallbackTally::default() }
+    }
+
+    /// CG on a lagged Cholesky factor from the start, with the direct
+    /// solve as its fallback.
+    pub fn factor_first(tolerance: f64, max_iterations: Option<usize>, limits: FactorLimits) -> Self {
+        let mut f = Fallbacks { first: None, factor: None, kind: FirstSolver::Factor, tolerance, max_iterations, slow: None, switch_limit: 0, limits, switch: false, switched: false, tally: FallbackTally::default() };
+        f.factor = Some(f.new_factor());
+        f
+    }
+
+    /// `auto`'s multigrid CG with at most `max_iterations` a solve, that
+    /// also turns to the factor from the next step on after a solve of
+    /// more than `slow` iterations, up to `switch_limit` unknowns.
+    pub fn auto_multigrid(max_iterations: usize, tolerance: f64, slow: usize, switch_limit: usize, limits: FactorLimits) -> Self {
         let mut multigrid = ConjugateGradient::new(Amg::default());
         multigrid.max_iterations = max_iterations;
         multigrid.tolerance = tolerance;
-        MultigridOrFactor { multigrid, factor: None, tolerance, slow, factor_limit, switch: false }
+        let mut f = Fallbacks::new(Box::new(multigrid), FirstSolver::AutoMultigrid, tolerance, None, limits);
+        f.slow = Some(slow);
+        f.switch_limit = switch_limit.min(limits.unknowns);
+        f
     }
 
-    /// Builds and factors the fallback on `a`.
-    fn to_factor(&mut self, a: &Csr) -> Result<(), SolveError> {
+    fn new_factor(&self) -> ConjugateGradient<LaggedCholesky> {
         let mut f = ConjugateGradient::new(LaggedCholesky::default());
         f.tolerance = self.tolerance;
+        if let Some(cap) = self.max_iterations {
+            f.max_iterations = cap;
+        }
+        f
+    }
+
+    /// Builds and factors the fallback on `a` if the limits allow it:
+    /// Ok(Err(why not)) if they do not or the factorisation fails.
+    fn turn_to_factor(&mut self, a: &Csr) -> Result<Result<(), String>, SolveError> {
+        let n = a.nrows;
+        if n > self.limits.unknowns {
+            return Ok(Err(if self.limits.unknowns == 0 {
+                "not allowed (factor limit 0 unknowns)".to_string()
+            } else {
+                format!("not tried: {n} unknowns, above the limit of {}", self.limits.unknowns)
+            }));
+        }
+        let mut f = self.new_factor();
         f.analyze(a)?;
+        let entries = f.precond_mut().analyze(a)?;
+        let bytes = 8 * entries as u64;
+        let limit = self.limits.bytes.unwrap_or_else(default_factor_bytes);
+        if bytes > limit {
+            return Ok(Err(format!("not tried: by its symbolic analysis it would hold {entries} entries ({:.2} GB), above the {:.2} GB allowed", bytes as f64 / 1e9, limit as f64 / 1e9)));
+        }
         // the factor reads no node structure
-        f.factor(a, Structure { node_ptr: &[], near_null: &[], count: 0 })?;
+        match f.factor(a, Structure { node_ptr: &[], near_null: &[], count: 0 }) {
+            Ok(()) => {}
+            Err(SolveError::NotPositiveDefinite) => return Ok(Err("its factorisation failed: the matrix is not numerically positive definite".into())),
+            Err(e) => return Err(e),
+        }
         self.factor = Some(f);
-        Ok(())
+        // the first solver's memory (a multigrid hierarchy) is not needed again
+        self.first = None;
+        self.switched = true;
+        Ok(Ok(()))
     }
 }
 
-impl SpdSolver for MultigridOrFactor {
+/// Errors after which another solver is worth trying: no convergence, or
+/// a breakdown of CG (a preconditioner that lost definiteness).
+fn worth_retrying(e: &SolveError) -> bool {
+    matches!(e, SolveError::NoConvergence { .. } | SolveError::NotPositiveDefinite)
+}
+
+impl SpdSolver for Fallbacks {
     fn analyze(&mut self, a: &Csr) -> Result<(), SolveError> {
-        match &mut self.factor {
-            Some(f) => f.analyze(a),
-            None => self.multigrid.analyze(a),
+        match (&mut self.factor, &mut self.first) {
+            (Some(f), _) => f.analyze(a),
+            (None, Some(first)) => first.analyze(a),
+            (None, None) => Err(SolveError::Order("a solver")),
         }
     }
 
     fn factor(&mut self, a: &Csr, structure: Structure<'_>) -> Result<(), SolveError> {
-        match &mut self.factor {
-            Some(f) => f.factor(a, structure),
-            None if self.switch => self.to_factor(a),
-            None => self.multigrid.factor(a, structure),
+        if self.factor.is_none() && self.switch {
+            self.switch = false;
+            if let Err(why) = self.turn_to_factor(a)? {
+                tracing::info!("the multigrid was slow, but a Cholesky factor is {why}: keeping the multigrid");
+            }
+        }
+        match (&mut self.factor, &mut self.first) {
+            (Some(f), _) => f.factor(a, structure),
+            (None, Some(first)) => first.factor(a, structure),
+            (None, None) => Err(SolveError::Order("a solver")),
         }
     }
 
     fn solve_in_place(&mut self, a: &Csr, rhs: &mut [f64]) -> Result<(), SolveError> {
-        if let Some(f) = &mut self.factor {
-            return f.solve_in_place(a, rhs);
-        }
-        let fits = a.nrows <= self.factor_limit;
+        let mut tried = Vec::new();
+        let mut just_built = false;
         let b = rhs.to_vec();
-        match self.multigrid.solve_in_place(a, rhs) {
-            Err(SolveError::NoConvergence(n)) if fits => {
-                tracing::info!("multigrid CG did not converge in {n} iterations: CG on a Cholesky factor from now on");
-                self.to_factor(a)?;
-                rhs.copy_from_slice(&b);
-                self.factor.as_mut().expect("just built").solve_in_place(a, rhs)
+        if self.factor.is_none() {
+            let Some(first) = self.first.as_mut() else { return Err(SolveError::Order("a solver")) };
+            let e = match first.solve_in_place(a, rhs) {
+                Ok(()) => {
+                    let info = first.info();
+                    if info.retried {
+                        self.tally.rebuilt += 1;
+                        self.tally.solved_by = Some("the first solver on a rebuilt preconditioner".into());
+                    }
+                    if let Some(slow) = self.slow {
+                        self.switch = a.nrows <= self.switch_limit && info.iterations > slow;
+                    }
+                    return Ok(());
+                }
+                Err(e) if worth_retrying(&e) => e,
+                Err(e) => return Err(e),
+            };
+            let retried = first.info().retried;
+            if retried {
+                self.tally.rebuilt += 1;
             }
+            tried.push(format!("{}{}: {e}", first.name(), if retried { ", then again on a rebuilt preconditioner" } else { "" }));
+            tracing::info!("{}: CG on a Cholesky factor of this matrix next", tried[0]);
+            match self.turn_to_factor(a)? {
+                Ok(()) => {
+                    self.tally.factor += 1;
+                    just_built = true;
+                    rhs.copy_from_slice(&b);
+                }
+                Err(why) => {
+                    tried.push(format!("a Cholesky factor: {why}"));
+                    return Err(SolveError::Exhausted { last: Box::new(e), tried });
+                }
+            }
+        }
+        let f = self.factor.as_mut().expect("the factor is in use");
+        match f.solve_in_place(a, rhs) {
             Ok(()) => {
-                self.switch = fits && self.multigrid.info().iterations > self.slow;
+                if just_built {
+                    self.tally.solved_by = Some("conjugate gradients on a fresh Cholesky factor".into());
+                } else if f.info().retried {
+                    self.tally.rebuilt += 1;
+                    self.tally.solved_by = Some("conjugate gradients on the lagged factor, factored anew".into());
+                }
                 Ok(())
             }
-            other => other,
+            // after a failed CG the factor is of this very matrix (CG
+            // factors it anew if it was older): solve by it alone
+            Err(e @ SolveError::NoConvergence { .. }) if f.precond_mut().is_fresh() => {
+                if f.info().retried {
+                    self.tally.rebuilt += 1;
+                }
+                tracing::info!("CG on a fresh Cholesky factor: {e}: solving by the factor alone");
+                rhs.copy_from_slice(&b);
+                f.precond_mut().direct(a, rhs)?;
+                f.accept(rhs);
+                self.tally.direct += 1;
+                self.tally.solved_by = Some("the Cholesky factor's direct solve".into());
+                Ok(())
+            }
+            Err(e) if worth_retrying(&e) => {
+                tried.push(format!("{}: {e}", f.name()));
+                Err(SolveError::Exhausted { last: Box::new(e), tried })
+            }
+            Err(e) => Err(e),
         }
     }
 
     fn name(&self) -> &'static str {
-        match self.factor {
-            Some(_) => "conjugate gradients (multigrid, then the Cholesky factor of an earlier step, as multigrid was slow)",
-            None => self.multigrid.name(),
+        match (&self.factor, &self.first) {
+            (Some(_), _) if self.switched => match self.kind {
+                FirstSolver::AutoMultigrid => "conjugate gradients (multigrid, then the Cholesky factor of an earlier step, as multigrid was slow)",
+                FirstSolver::Multigrid => "conjugate gradients (multigrid, then the Cholesky factor of an earlier step, as multigrid did not converge)",
+                FirstSolver::Jacobi => "conjugate gradients (Jacobi, then the Cholesky factor of an earlier step, as Jacobi did not converge)",
+                FirstSolver::Factor => "conjugate gradients (Cholesky factor of an earlier step, warm start)",
+            },
+            (Some(f), _) => f.name(),
+            (None, Some(first)) => first.name(),
+            (None, None) => "none",
         }
     }
 
     fn info(&self) -> SolveInfo {
-        match &self.factor {
-            Some(f) => SolveInfo { fell_back: true, ..f.info() },
-            None => self.multigrid.info(),
+        match (&self.factor, &self.first) {
+            (Some(f), _) => SolveInfo { fell_back: self.switched, ..f.info() },
+            (None, Some(first)) => first.info(),
+            (None, None) => SolveInfo::default(),
         }
+    }
+
+    fn fallbacks(&self) -> FallbackTally {
+        self.tally.clone()
     }
 }
 

@@ -217,10 +217,11 @@ fn cg_that_does_not_converge_is_a_clear_error() {
     cg.factor(&a, s).unwrap();
     let mut x: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
     let e = cg.solve_in_place(&a, &mut x).unwrap_err();
-    assert!(matches!(e, SolveError::NoConvergence(5)), "{e:?}");
+    let SolveError::NoConvergence { iterations: 5, residual, tolerance } = e else { panic!("{e:?}") };
+    assert!(residual > tolerance && residual < 1.0, "{residual}");
     // through Algorithm 1's error, as the command line prints it
     let chain = format!("{:#}", anyhow::Error::from(crate::deform::DeformError::from(e)));
-    assert_eq!(chain, "the linear solver failed: conjugate gradients did not converge in 5 iterations");
+    assert_eq!(chain, format!("the linear solver failed (the solver, not the input): conjugate gradients did not converge in 5 iterations (relative residual {residual:.2e} reached, 1e-7 wanted)"));
 }
 
 #[test]
@@ -255,4 +256,89 @@ fn an_earlier_factor_preconditions_until_the_matrix_has_moved_too_far() {
     assert!(seen[1..4].iter().all(|s| s.1 <= 4), "{seen:?}");
     assert!(seen[4].1 > 8, "{seen:?}");
     assert!(seen[5].1 <= 2, "{seen:?}");
+}
+
+/// The unshifted Laplacian on 40² with a right-hand side Jacobi CG does
+/// not solve in 5 iterations.
+fn hard_case() -> (Csr, Vec<f64>, (Vec<u32>, Vec<f64>)) {
+    let a = laplacian(40, 0.0);
+    let n = 40 * 40;
+    let b: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
+    (a, b, scalar_structure(n))
+}
+
+fn capped_jacobi(cap: usize) -> Box<dyn SpdSolver> {
+    let mut cg = ConjugateGradient::new(Jacobi::default());
+    cg.max_iterations = cap;
+    Box::new(cg)
+}
+
+#[test]
+fn a_solve_that_fails_turns_to_a_fresh_factor_and_keeps_it() {
+    let (a, b, (ptr, null)) = hard_case();
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let limits = FactorLimits { unknowns: usize::MAX, bytes: None };
+    let mut solver = Fallbacks::new(capped_jacobi(5), FirstSolver::Jacobi, DEFAULT_TOLERANCE, Some(5), limits);
+    let x = solve_with(&mut solver, &a, &b, s);
+    let mut r = vec![0.0; b.len()];
+    a.residual(&b, &x, &mut r);
+    assert!(dot(&r, &r).sqrt() <= DEFAULT_TOLERANCE * dot(&b, &b).sqrt(), "not solved");
+    let t = solver.fallbacks();
+    assert_eq!((t.rebuilt, t.factor, t.direct), (0, 1, 0), "{t:?}");
+    assert_eq!(t.solved_by.as_deref(), Some("conjugate gradients on a fresh Cholesky factor"));
+    assert!(solver.info().fell_back && solver.name().contains("Jacobi, then the Cholesky factor"), "{}", solver.name());
+    // the factor stays: the next solve needs no fallback
+    solver.factor(&a, s).unwrap();
+    let mut y = b.clone();
+    solver.solve_in_place(&a, &mut y).unwrap();
+    assert_eq!(solver.fallbacks().factor, 1);
+    assert!(solver.info().iterations <= 1, "{:?}", solver.info());
+}
+
+#[test]
+fn a_solve_fails_only_when_no_factor_is_allowed_and_says_what_was_tried() {
+    let (a, b, (ptr, null)) = hard_case();
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    for (limits, why) in [
+        (FactorLimits { unknowns: 0, bytes: None }, "a Cholesky factor: not allowed (factor limit 0 unknowns)"),
+        (FactorLimits { unknowns: 1000, bytes: None }, "a Cholesky factor: not tried: 1600 unknowns, above the limit of 1000"),
+        (FactorLimits { unknowns: usize::MAX, bytes: Some(800) }, "a Cholesky factor: not tried: by its symbolic analysis it would hold"),
+    ] {
+        let mut solver = Fallbacks::new(capped_jacobi(5), FirstSolver::Jacobi, DEFAULT_TOLERANCE, Some(5), limits);
+        solver.analyze(&a).unwrap();
+        solver.factor(&a, s).unwrap();
+        let mut x = b.clone();
+        let e = solver.solve_in_place(&a, &mut x).unwrap_err();
+        let SolveError::Exhausted { last, tried } = &e else { panic!("{e:?}") };
+        assert!(matches!(**last, SolveError::NoConvergence { iterations: 5, .. }), "{last:?}");
+        assert_eq!(tried.len(), 2, "{tried:?}");
+        assert!(tried[0].starts_with("conjugate gradients (Jacobi, warm start): conjugate gradients did not converge in 5 iterations (relative residual"), "{}", tried[0]);
+        assert!(tried[1].starts_with(why), "{}", tried[1]);
+        assert_eq!(solver.fallbacks(), FallbackTally::default());
+    }
+}
+
+#[test]
+fn cg_on_a_fresh_factor_that_hits_its_cap_solves_directly() {
+    // tolerance 0: no CG meets it, so the lagged factor is factored anew
+    // for this matrix (the rebuilt preconditioner), then solves alone
+    let (a, b, (ptr, null)) = hard_case();
+    let s = Structure { node_ptr: &ptr, near_null: &null, count: 1 };
+    let limits = FactorLimits { unknowns: usize::MAX, bytes: None };
+    let mut solver = Fallbacks::factor_first(0.0, Some(2), limits);
+    let mut x = solve_with(&mut solver, &a, &b, s);
+    let t = solver.fallbacks();
+    assert_eq!((t.rebuilt, t.factor, t.direct), (0, 0, 1), "a factor just made is not made again: {t:?}");
+    assert_eq!(t.solved_by.as_deref(), Some("the Cholesky factor's direct solve"));
+    let mut r = vec![0.0; b.len()];
+    a.residual(&b, &x, &mut r);
+    assert!(dot(&r, &r).sqrt() <= 1e-10 * dot(&b, &b).sqrt());
+    // at the next step the factor is lagged: CG fails, it is factored anew
+    // (a rebuild), CG fails again and the direct solve ends it
+    solver.factor(&a, s).unwrap();
+    x.copy_from_slice(&b);
+    solver.solve_in_place(&a, &mut x).unwrap();
+    let t = solver.fallbacks();
+    assert_eq!((t.rebuilt, t.factor, t.direct), (1, 0, 2), "{t:?}");
+    assert!(!solver.info().fell_back, "the factor was the first solver");
 }
