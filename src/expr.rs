@@ -4,7 +4,9 @@
 //! list of variable names and compiled to a flat stack program with
 //! constants folded. Evaluation walks that program with a fixed-size stack
 //! on the machine stack, so [`Expr::eval`] never allocates: it is meant to be
-//! called millions of times.
+//! called millions of times. [`Expr::eval_gradient`] walks the same program
+//! in forward mode (dual numbers), giving the value and the exact partial
+//! derivatives in one pass, as Newton's methods on an expression need.
 //!
 //! Grammar (lowest to highest precedence):
 //!
@@ -25,6 +27,10 @@ use std::fmt;
 /// Maximum operand-stack depth of a compiled expression. Deeper expressions
 /// are rejected at parse time so evaluation can use a fixed array.
 const MAX_STACK: usize = 64;
+
+/// Stack depth that nearly every expression fits: evaluated with an array
+/// of this size, which is cheaper to set up than one of [`MAX_STACK`].
+const SHORT_STACK: usize = 8;
 
 /// Maximum nesting of parentheses, calls and unary operators, so that
 /// hostile input cannot overflow the parser's recursion.
@@ -122,6 +128,30 @@ enum F1 {
 }
 
 impl F1 {
+    /// The derivative f'(x), given `v = f(x)` (which several reuse).
+    /// Where f is not differentiable: `abs'(0) = 0` (the mean of the
+    /// one-sided slopes, what a central difference gives) and the
+    /// derivatives of the step functions `floor`, `ceil`, `sign` are 0.
+    fn derivative(self, x: f64, v: f64) -> f64 {
+        match self {
+            F1::Sin => x.cos(),
+            F1::Cos => -x.sin(),
+            F1::Tan => 1.0 + v * v,
+            F1::Asin => 1.0 / (1.0 - x * x).sqrt(),
+            F1::Acos => -1.0 / (1.0 - x * x).sqrt(),
+            F1::Atan => 1.0 / (1.0 + x * x),
+            F1::Sinh => x.cosh(),
+            F1::Cosh => x.sinh(),
+            F1::Tanh => 1.0 - v * v,
+            F1::Exp => v,
+            F1::Ln => 1.0 / x,
+            F1::Log10 => 1.0 / (x * std::f64::consts::LN_10),
+            F1::Sqrt => 0.5 / v,
+            F1::Abs => sign(x),
+            F1::Floor | F1::Ceil | F1::Sign => 0.0,
+        }
+    }
+
     fn apply(self, x: f64) -> f64 {
         match self {
             F1::Sin => x.sin(),
@@ -239,6 +269,9 @@ enum Op {
     Const(f64),
     Var(usize),
     Neg,
+    /// `a^2` (and `pow(a, 2)`) as `a*a`: the correctly rounded square,
+    /// which `powf` also aims at, for a fraction of its cost.
+    Square,
     Call1(F1),
     Call2(F2),
 }
@@ -249,6 +282,71 @@ pub struct Expr {
     source: String,
     vars: Vec<String>,
     ops: Vec<Op>,
+    /// Most operands the program holds at once.
+    depth: usize,
+}
+
+/// `f'·da`, direction by direction, with a direction along which the
+/// operand does not change contributing 0 even where f' is infinite or
+/// NaN (`sqrt(x)` at x = 0 does not vary with y).
+#[inline(always)]
+fn chain<const N: usize>(fp: f64, da: &[f64; N]) -> [f64; N] {
+    if fp.is_finite() {
+        da.map(|d| fp * d)
+    } else {
+        da.map(|d| if d == 0.0 { 0.0 } else { fp * d })
+    }
+}
+
+/// The derivative of `f(a, b)` (value `v`) from those of its operands.
+/// `min`/`max` follow the operand they pick and take the mean of both at a
+/// tie (the central difference of a kink); `pow` leaves out the term of an
+/// operand that does not vary, so that `a^b` with a negative base and a
+/// constant exponent has a derivative.
+#[inline(always)]
+fn derivative2<const N: usize>(f: F2, a: f64, b: f64, v: f64, da: &[f64; N], db: &[f64; N]) -> [f64; N] {
+    #[inline(always)]
+    fn zip<const N: usize>(da: &[f64; N], db: &[f64; N], g: impl Fn(f64, f64) -> f64) -> [f64; N] {
+        std::array::from_fn(|k| g(da[k], db[k]))
+    }
+    match f {
+        F2::Add => zip(da, db, |x, y| x + y),
+        F2::Sub => zip(da, db, |x, y| x - y),
+        F2::Mul => zip(da, db, |x, y| a * y + b * x),
+        F2::Div => zip(da, db, |x, y| (x - v * y) / b),
+        F2::Pow => {
+            let varies = |d: &[f64; N]| d.iter().any(|&x| x != 0.0);
+            let mut out = [0.0; N];
+            if varies(da) {
+                // b a^(b-1) without a second powf where a ≠ 0
+                let fp = if a != 0.0 && v.is_finite() { b * v / a } else { b * a.powf(b - 1.0) };
+                out = chain(fp, da);
+            }
+            if varies(db) {
+                // 0^b is 0 for every b > 0: no NaN from 0·ln 0
+                let t = chain(if v == 0.0 { 0.0 } else { v * a.ln() }, db);
+                for k in 0..N {
+                    out[k] += t[k];
+                }
+            }
+            out
+        }
+        F2::Atan2 => {
+            let r2 = a * a + b * b;
+            zip(da, db, |x, y| (b * x - a * y) / r2)
+        }
+        F2::Min | F2::Max => {
+            let first = if f == F2::Min { a < b } else { a > b };
+            let second = if f == F2::Min { b < a } else { b > a };
+            if first || b.is_nan() {
+                *da
+            } else if second || a.is_nan() {
+                *db
+            } else {
+                zip(da, db, |x, y| 0.5 * (x + y))
+            }
+        }
+    }
 }
 
 impl Expr {
@@ -282,6 +380,7 @@ impl Expr {
             source: text.to_string(),
             vars: vars.iter().map(|v| v.to_string()).collect(),
             ops,
+            depth: max_depth,
         })
     }
 
@@ -292,7 +391,17 @@ impl Expr {
     /// If `values` is shorter than the variable list and the expression uses
     /// a variable beyond its end.
     pub fn eval(&self, values: &[f64]) -> f64 {
-        let mut stack = [0.0f64; MAX_STACK];
+        if self.depth <= SHORT_STACK {
+            self.run::<SHORT_STACK>(values)
+        } else {
+            self.run::<MAX_STACK>(values)
+        }
+    }
+
+    /// [`Expr::eval`] with a stack of `S ≥ self.depth` entries.
+    #[inline(always)]
+    fn run<const S: usize>(&self, values: &[f64]) -> f64 {
+        let mut stack = [0.0f64; S];
         let mut top = 0usize; // number of live entries
         for op in &self.ops {
             match *op {
@@ -305,6 +414,7 @@ impl Expr {
                     top += 1;
                 }
                 Op::Neg => stack[top - 1] = -stack[top - 1],
+                Op::Square => stack[top - 1] *= stack[top - 1],
                 Op::Call1(f) => stack[top - 1] = f.apply(stack[top - 1]),
                 Op::Call2(f) => {
                     top -= 1;
@@ -313,6 +423,73 @@ impl Expr {
             }
         }
         stack[0]
+    }
+
+    /// The value and the gradient with respect to the first `N` variables
+    /// (`values[..N]`; the others are held fixed), in one forward-mode
+    /// pass over the compiled program: the value is [`Expr::eval`]'s to the
+    /// bit, the derivatives exact up to rounding (no finite differences).
+    /// No allocation.
+    ///
+    /// Where the expression is not differentiable the derivative is a
+    /// one-sided or averaged one (see `abs`, `min`, `max`), 0 for `floor`,
+    /// `ceil` and `sign`, and infinite or NaN where the derivative blows up
+    /// (`sqrt` at 0 along a direction it varies in).
+    ///
+    /// # Panics
+    /// As [`Expr::eval`], and if `N` exceeds `values.len()`.
+    pub fn eval_gradient<const N: usize>(&self, values: &[f64]) -> (f64, [f64; N]) {
+        assert!(N <= values.len(), "eval_gradient: {N} directions but {} values", values.len());
+        if self.depth <= SHORT_STACK {
+            self.run_gradient::<N, SHORT_STACK>(values)
+        } else {
+            self.run_gradient::<N, MAX_STACK>(values)
+        }
+    }
+
+    /// [`Expr::eval_gradient`] with a stack of `S ≥ self.depth` entries.
+    #[inline(always)]
+    fn run_gradient<const N: usize, const S: usize>(&self, values: &[f64]) -> (f64, [f64; N]) {
+        let mut val = [0.0f64; S];
+        let mut der = [[0.0f64; N]; S];
+        let mut top = 0usize;
+        for op in &self.ops {
+            match *op {
+                Op::Const(c) => {
+                    val[top] = c;
+                    der[top] = [0.0; N];
+                    top += 1;
+                }
+                Op::Var(i) => {
+                    val[top] = values[i];
+                    der[top] = std::array::from_fn(|k| if k == i { 1.0 } else { 0.0 });
+                    top += 1;
+                }
+                Op::Neg => {
+                    val[top - 1] = -val[top - 1];
+                    der[top - 1] = der[top - 1].map(|d| -d);
+                }
+                Op::Square => {
+                    let a = val[top - 1];
+                    val[top - 1] = a * a;
+                    der[top - 1] = der[top - 1].map(|d| 2.0 * a * d);
+                }
+                Op::Call1(f) => {
+                    let a = val[top - 1];
+                    let v = f.apply(a);
+                    val[top - 1] = v;
+                    der[top - 1] = chain(f.derivative(a, v), &der[top - 1]);
+                }
+                Op::Call2(f) => {
+                    top -= 1;
+                    let (a, b) = (val[top - 1], val[top]);
+                    let v = f.apply(a, b);
+                    val[top - 1] = v;
+                    der[top - 1] = derivative2(f, a, b, v, &der[top - 1], &der[top]);
+                }
+            }
+        }
+        (val[0], der[0])
     }
 
     /// Whether the compiled expression reads variable `var` (after constant
@@ -389,6 +566,11 @@ fn emit(node: &Node, ops: &mut Vec<Op>, depth: usize) -> usize {
         Node::Call1(f, a) => {
             let d = emit(a, ops, depth);
             ops.push(Op::Call1(*f));
+            d
+        }
+        Node::Call2(F2::Pow, a, b) if matches!(**b, Node::Num(n) if n == 2.0) => {
+            let d = emit(a, ops, depth);
+            ops.push(Op::Square);
             d
         }
         Node::Call2(f, a, b) => {
@@ -1013,6 +1195,139 @@ mod tests {
             err("x + é"),
             ExprError::UnknownVariable { column: 5, .. }
         ));
+    }
+
+    /// The gradient in x, y (t held fixed) of `text` at a point.
+    fn grad(text: &str, x: f64, y: f64, t: f64) -> (f64, [f64; 2]) {
+        Expr::parse(text, VARS).unwrap_or_else(|e| panic!("{text}: {e}")).eval_gradient::<2>(&[x, y, t])
+    }
+
+    #[test]
+    fn gradients_match_exact_derivatives() {
+        type G = fn(f64, f64, f64) -> [f64; 2];
+        let cases: &[(&str, G)] = &[
+            ("x^2 + y^2 - 0.25", |x, y, _| [2.0 * x, 2.0 * y]),
+            ("x*y*t - x/y", |x, y, t| [y * t - 1.0 / y, x * t + x / (y * y)]),
+            ("-x^3 + pow(y, 4)", |x, y, _| [-3.0 * x * x, 4.0 * y.powi(3)]),
+            ("sqrt(x^2 + y^2) - 1", |x, y, _| {
+                let r = x.hypot(y);
+                [x / r, y / r]
+            }),
+            ("(sqrt(x^2 + y^2) - 1)^2 + t^2 - 0.25", |x, y, _| {
+                let r = x.hypot(y);
+                [2.0 * (r - 1.0) * x / r, 2.0 * (r - 1.0) * y / r]
+            }),
+            ("exp(x*y) + ln(x^2 + 1) + log10(y^2 + 2)", |x, y, _| {
+                let e = (x * y).exp();
+                [y * e + 2.0 * x / (x * x + 1.0), x * e + 2.0 * y / ((y * y + 2.0) * std::f64::consts::LN_10)]
+            }),
+            ("sin(2*x) * cos(y) + tan(y/4)", |x, y, _| {
+                let c = (y / 4.0).cos();
+                [2.0 * (2.0 * x).cos() * y.cos(), -(2.0 * x).sin() * y.sin() + 0.25 / (c * c)]
+            }),
+            ("asin(x/4) + acos(y/5) + atan(x*y)", |x, y, _| {
+                let d = 1.0 + (x * y).powi(2);
+                [0.25 / (1.0 - x * x / 16.0).sqrt() + y / d, -0.2 / (1.0 - y * y / 25.0).sqrt() + x / d]
+            }),
+            ("sinh(x) + cosh(y) + tanh(x - y)", |x, y, _| {
+                let s = 1.0 - (x - y).tanh().powi(2);
+                [x.cosh() + s, y.sinh() - s]
+            }),
+            ("atan2(y, x)", |x, y, _| {
+                let r2 = x * x + y * y;
+                [-y / r2, x / r2]
+            }),
+            ("atan2(x - 1, y + 2) * t", |x, y, t| {
+                let (a, b) = (x - 1.0, y + 2.0);
+                let r2 = a * a + b * b;
+                [t * b / r2, -t * a / r2]
+            }),
+            ("abs(x)^1.5 + (y^2 + 1)^-0.5", |x, y, _| [1.5 * x.abs().sqrt() * x.signum(), -y * (y * y + 1.0).powf(-1.5)]),
+            ("(x^2 + 1)^y", |x, y, _| {
+                let a = x * x + 1.0;
+                [y * a.powf(y - 1.0) * 2.0 * x, a.powf(y) * a.ln()]
+            }),
+            ("2^x * e^y", |x, y, _| {
+                let v = 2f64.powf(x) * y.exp();
+                [v * 2f64.ln(), v]
+            }),
+            ("min(x, y) + 2*max(x^2, y, t)", |x, y, t| {
+                let dmin = if x < y { [1.0, 0.0] } else { [0.0, 1.0] };
+                let dmax = if x * x > y.max(t) { [2.0 * x, 0.0] } else if y > t { [0.0, 1.0] } else { [0.0, 0.0] };
+                [dmin[0] + 2.0 * dmax[0], dmin[1] + 2.0 * dmax[1]]
+            }),
+            ("floor(x) + ceil(y) + sign(x*y) + 3", |_, _, _| [0.0, 0.0]),
+        ];
+        let points = [(0.3, -1.7, 2.0), (1.25, 0.5, -0.75), (-2.0, 3.5, 0.1), (0.9, 0.2, 10.0), (-0.6, -0.45, 1.5)];
+        for &(x, y, t) in &points {
+            for (text, exact) in cases {
+                let (v, g) = grad(text, x, y, t);
+                // the value is eval's, to the bit
+                assert_eq!(v.to_bits(), ev(text, x, y, t).to_bits(), "{text} at {x},{y},{t}");
+                let want = exact(x, y, t);
+                let scale = 1.0 + want[0].abs().max(want[1].abs());
+                for k in 0..2 {
+                    assert!((g[k] - want[k]).abs() <= 1e-13 * scale, "{text} at {x},{y},{t}: d{k} = {} vs {}", g[k], want[k]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn gradients_of_a_deep_program_and_of_the_held_variables() {
+        // nine nested levels need more than the short stack
+        let text = "1 + x*(2 + y*(3 + x*(4 + y*(5 + x*(6 + y*(7 + x*(8 + y*(9 + x))))))))";
+        let e = Expr::parse(text, VARS).unwrap();
+        assert!(e.depth > SHORT_STACK, "{}", e.depth);
+        let f = |x: f64, y: f64| e.eval(&[x, y, 0.0]);
+        let (x, y) = (0.7, -0.4);
+        let (v, g) = e.eval_gradient::<2>(&[x, y, 0.0]);
+        assert_eq!(v, f(x, y));
+        // a polynomial: a central difference of step h is exact to O(h²)
+        // (times its third derivative, about 500 here) plus rounding
+        let h = 1e-5;
+        let fd = [(f(x + h, y) - f(x - h, y)) / (2.0 * h), (f(x, y + h) - f(x, y - h)) / (2.0 * h)];
+        for k in 0..2 {
+            assert!((g[k] - fd[k]).abs() < 1e-6 * (1.0 + fd[k].abs()), "{k}: {} vs {}", g[k], fd[k]);
+        }
+        // N = 1: y and t are held fixed; N = 3: t is a direction too
+        assert_eq!(grad("x*y + t", 2.0, 3.0, 4.0).1, [3.0, 2.0]);
+        let e = Expr::parse("x*y + t^2", VARS).unwrap();
+        assert_eq!(e.eval_gradient::<1>(&[2.0, 3.0, 4.0]), (22.0, [3.0]));
+        assert_eq!(e.eval_gradient::<3>(&[2.0, 3.0, 4.0]), (22.0, [3.0, 2.0, 8.0]));
+        assert_eq!(Expr::parse("5", VARS).unwrap().eval_gradient::<3>(&[1.0, 1.0, 1.0]), (5.0, [0.0; 3]));
+    }
+
+    #[test]
+    fn gradients_where_the_expression_is_not_smooth() {
+        // kinks: the mean of the one-sided slopes, as a central difference
+        assert_eq!(grad("abs(x) + abs(y - 1)", 0.0, 1.0, 0.0).1, [0.0, 0.0]);
+        assert_eq!(grad("min(x, y)", 0.5, 0.5, 0.0).1, [0.5, 0.5]);
+        assert_eq!(grad("max(x, 2*y)", 1.0, 0.5, 0.0).1, [0.5, 1.0]);
+        // away from a tie, the branch taken
+        assert_eq!(grad("max(x, 2*y)", 1.0, 0.4, 0.0).1, [1.0, 0.0]);
+        // sqrt at 0: infinite along the direction it varies in, 0 across
+        let (v, g) = grad("sqrt(x)", 0.0, 1.0, 0.0);
+        assert_eq!(v, 0.0);
+        assert!(g[0].is_infinite() && g[1] == 0.0, "{g:?}");
+        // 0^b for b > 0 varies with neither; a negative base with a
+        // constant exponent is differentiable
+        assert_eq!(grad("x^y", 0.0, 2.5, 0.0).1, [0.0, 0.0]);
+        assert_eq!(grad("x^3", -2.0, 0.0, 0.0).1, [12.0, 0.0]);
+        assert_eq!(grad("x^2", -3.0, 0.0, 0.0), (9.0, [-6.0, 0.0]));
+    }
+
+    #[test]
+    fn squares_compile_to_a_product() {
+        for text in ["x^2", "pow(x, 2)", "x^(1 + 1)"] {
+            let e = Expr::parse(text, VARS).unwrap();
+            assert_eq!(e.ops, vec![Op::Var(0), Op::Square], "{text}");
+            for x in [0.3, -1.7, 1e200, -0.0, f64::INFINITY] {
+                assert_eq!(e.eval(&[x, 0.0, 0.0]).to_bits(), x.powf(2.0).to_bits(), "{text} at {x}");
+            }
+            assert!(e.eval(&[f64::NAN, 0.0, 0.0]).is_nan());
+        }
+        assert_eq!(Expr::parse("x^2.5", VARS).unwrap().ops, vec![Op::Var(0), Op::Const(2.5), Op::Call2(F2::Pow)]);
     }
 
     #[test]

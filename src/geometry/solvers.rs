@@ -360,37 +360,26 @@ fn eberly_first_quadrant(e0: f64, e1: f64, y0: f64, y1: f64) -> [f64; 2] {
 
 /// How Newton's projection onto a level set ([`project_level_set`]) is run.
 pub(super) struct Newton {
-    /// Central-difference step of ∇φ, relative to `1 + max_k |x_k|`.
-    pub(super) h_rel: f64,
     /// Most iterations.
     pub(super) iterations: usize,
     /// Converged once a step is at most this relative to `1 + |x|`.
     pub(super) tol: f64,
 }
 
-/// ∇φ at `x` by central differences of step `h_rel (1 + max_k |x_k|)`:
-/// the user's φ is an expression, with no derivative of its own.
-pub(super) fn central_gradient<const D: usize>(phi: &dyn Fn([f64; D]) -> f64, x: [f64; D], h_rel: f64) -> [f64; D] {
-    let h = h_rel * (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-    std::array::from_fn(|k| {
-        let (mut a, mut b) = (x, x);
-        a[k] += h;
-        b[k] -= h;
-        (phi(a) - phi(b)) / (2.0 * h)
-    })
-}
-
 /// Newton's projection onto {φ = 0}, `x ← x − φ ∇φ / |∇φ|²`, from `x`: a
 /// foot point on the zero set near `x` (for points close to it, as mesh
-/// nodes are, the closest one to first order). Returns the last iterate
-/// and whether the steps converged; they do not where ∇φ vanishes, φ is
-/// not finite, or the iterations run out.
-pub(super) fn project_level_set<const D: usize>(phi: &dyn Fn([f64; D]) -> f64, x: [f64; D], newton: &Newton) -> ([f64; D], bool) {
+/// nodes are, the closest one to first order). `phi_grad` gives φ and its
+/// exact gradient in one call (a level set's compiled expression in
+/// forward mode), so an iteration costs one evaluation and allocates
+/// nothing. Returns the last iterate and whether the steps converged; they
+/// do not where ∇φ vanishes or is not finite, φ is not finite, or the
+/// iterations run out.
+pub(super) fn project_level_set<const D: usize>(phi_grad: impl Fn([f64; D]) -> (f64, [f64; D]), x: [f64; D], newton: &Newton) -> ([f64; D], bool) {
     let mut p = x;
     for _ in 0..newton.iterations {
-        let (v, g) = (phi(p), central_gradient(phi, p, newton.h_rel));
+        let (v, g) = phi_grad(p);
         let n2 = dot(g, g);
-        if !(n2 > 0.0) || !v.is_finite() {
+        if !(n2 > 0.0 && n2.is_finite() && v.is_finite()) {
             return (p, false);
         }
         let step: [f64; D] = std::array::from_fn(|k| v * g[k] / n2);
