@@ -395,7 +395,7 @@ fn cylinder() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cylinder_bl_coarse.msh")
 }
 
-const WALL: &str = "[[group]]\nname = \"wall\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 0.5 }\n";
+use crate::common::WALL_CIRCLE as WALL;
 
 #[test]
 fn curve_writes_a_certified_mesh_that_quality_reads() {

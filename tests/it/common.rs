@@ -9,6 +9,21 @@ use std::process::Command;
 
 use serde_json::Value;
 
+/// The geometry file binding `wall` to the circle r = 0.5.
+pub const WALL_CIRCLE: &str = include_str!("../data/circle_wall.geometry.toml");
+
+/// The geometry file of the ball octant (`tests/data/ball_octant_hex.msh`).
+pub const BALL_OCTANT: &str = include_str!("../data/ball_octant.geometry.toml");
+
+/// The geometry file of Gmsh's three-block quarter disk
+/// (tests/python/quarter_disk.py).
+pub const QUARTER_DISK: &str = include_str!("../data/quarter_disk.geometry.toml");
+
+/// The file `tests/data/<file>`.
+pub fn data(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file)
+}
+
 /// The Python with `gmsh` and `vtk`, or a panic saying how to get one.
 pub fn python() -> PathBuf {
     if let Some(p) = std::env::var_os("DEFORMESH_PYTHON") {

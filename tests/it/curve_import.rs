@@ -8,32 +8,11 @@ use deformesh::highorder::curve::CurveOptions;
 use deformesh::mesh::CurvedMesh;
 use std::path::{Path, PathBuf};
 
-fn data(file: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file)
-}
+use crate::common::data;
 
-const CYLINDER: &str = r#"
-[[group]]
-name = "wall"
-kind = "curve"
-shape = { type = "circle", centre = [0.0, 0.0], radius = 0.5 }
-"#;
+use crate::common::WALL_CIRCLE as CYLINDER;
 
-const BALL: &str = r#"
-[[group]]
-name = "sphere"
-kind = "curve"
-shape = { type = "sphere", centre = [0.0, 0.0, 0.0], radius = 1.0 }
-[[group]]
-name = "plane_x0"
-kind = "slip"
-[[group]]
-name = "plane_y0"
-kind = "slip"
-[[group]]
-name = "plane_z0"
-kind = "slip"
-"#;
+use crate::common::BALL_OCTANT as BALL;
 
 fn job(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> CurveJob {
     let g = dir.join("geometry.toml");
@@ -623,15 +602,7 @@ fn sliding_boundaries_converge_at_the_order_on_cylinder_layers() {
     }
 }
 
-const QUARTER_DISK: &str = r#"
-[[group]]
-name = "arc"
-kind = "curve"
-shape = { type = "circle", centre = [0.0, 0.0], radius = 1.0 }
-[[group]]
-name = "axes"
-kind = "slip"
-"#;
+use crate::common::QUARTER_DISK;
 
 #[test]
 fn sliding_boundaries_converge_at_the_order_on_a_quarter_disk() {

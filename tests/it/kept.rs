@@ -12,12 +12,7 @@ use serde_json::Value;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-const CHANNEL: &str = r#"
-[[group]]
-name = "wall"
-kind = "curve"
-shape = { type = "circle", centre = [0.0, 0.0], radius = 0.5 }
-"#;
+use crate::common::WALL_CIRCLE as CHANNEL;
 
 const BOX: &str = r#"
 [[group]]

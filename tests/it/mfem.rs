@@ -346,10 +346,9 @@ fn mfem_integrates_curved_quarter_disks_and_ball_octants() {
     let dir = tempfile::tempdir().unwrap();
     let disk = dir.path().join("quarter_disk.msh");
     crate::common::run_script("quarter_disk.py", &["6", disk.to_str().unwrap()]);
-    let ball = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ball_octant_hex.msh");
-    let arc = "[[group]]\nname = \"arc\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 1.0 }\n[[group]]\nname = \"axes\"\nkind = \"slip\"\n";
-    let sphere = "[[group]]\nname = \"sphere\"\nkind = \"curve\"\nshape = { type = \"sphere\", centre = [0.0, 0.0, 0.0], radius = 1.0 }\n\
-                  [[group]]\nname = \"plane_x0\"\nkind = \"slip\"\n[[group]]\nname = \"plane_y0\"\nkind = \"slip\"\n[[group]]\nname = \"plane_z0\"\nkind = \"slip\"\n";
+    let ball = crate::common::data("ball_octant_hex.msh");
+    let arc = crate::common::QUARTER_DISK;
+    let sphere = crate::common::BALL_OCTANT;
     // the ball at p = 2 only: at p = 3 its two runs take 15 s of the suite
     for (input, geometry, exact, dim, orders) in [(&disk, arc, PI / 4.0, 2, &[2, 3][..]), (&ball, sphere, PI / 6.0, 3, &[2][..])] {
         let g = dir.path().join("geometry.toml");

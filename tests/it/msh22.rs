@@ -12,32 +12,11 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn data(file: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file)
-}
+use crate::common::data;
 
-const CYLINDER: &str = r#"
-[[group]]
-name = "wall"
-kind = "curve"
-shape = { type = "circle", centre = [0.0, 0.0], radius = 0.5 }
-"#;
+use crate::common::WALL_CIRCLE as CYLINDER;
 
-const BALL: &str = r#"
-[[group]]
-name = "sphere"
-kind = "curve"
-shape = { type = "sphere", centre = [0.0, 0.0, 0.0], radius = 1.0 }
-[[group]]
-name = "plane_x0"
-kind = "slip"
-[[group]]
-name = "plane_y0"
-kind = "slip"
-[[group]]
-name = "plane_z0"
-kind = "slip"
-"#;
+use crate::common::BALL_OCTANT as BALL;
 
 /// `input` opened by Gmsh and saved as MSH 4.1 and as MSH 2.2 in `dir`.
 fn twins(input: &Path, dir: &Path, stem: &str) -> (PathBuf, PathBuf) {

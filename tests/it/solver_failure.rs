@@ -11,12 +11,7 @@ use deformesh::deform::{DeformOptions, SolverChoice};
 use deformesh::highorder::curve::CurveOptions;
 use std::path::{Path, PathBuf};
 
-const CYLINDER: &str = r#"
-[[group]]
-name = "wall"
-kind = "curve"
-shape = { type = "circle", centre = [0.0, 0.0], radius = 0.5 }
-"#;
+use crate::common::WALL_CIRCLE as CYLINDER;
 
 /// The cylinder's boundary layer curved at p = 2 in 4 steps, the geometry
 /// in `dir`, the outputs in `dir/out` (created empty).

@@ -32,19 +32,27 @@ occ.synchronize()
 s = surf[1]
 
 
-def curves_at(pred):
-    out = []
-    for d, t in gmsh.model.getBoundary([(2, s)], oriented=False):
+def sides_of(dim_tag):
+    """The boundary entities of `dim_tag` on each side of the channel,
+    judged by their bounding boxes in x and y (the ends z = 0, 1 of the
+    box are on none)."""
+    near = lambda a, b: abs(a - b) < 1e-6  # OCC pads boxes by 1e-7
+    out = {"inlet": [], "outlet": [], "sides": [], "wall": []}
+    for d, t in gmsh.model.getBoundary([dim_tag], oriented=False):
         x0, y0, _, x1, y1, _ = gmsh.model.getBoundingBox(d, t)
-        if pred(x0, y0, x1, y1):
-            out.append(t)
+        if near(x0, -L) and near(x1, -L):
+            out["inlet"].append(t)
+        elif near(x0, L) and near(x1, L):
+            out["outlet"].append(t)
+        elif near(y0, y1) and near(abs(y0), H):
+            out["sides"].append(t)
+        elif max(abs(x0), abs(x1), abs(y0), abs(y1)) <= r + 1e-6:
+            out["wall"].append(t)
     return out
 
 
-inlet = curves_at(lambda x0, y0, x1, y1: abs(x0 + L) < 1e-6 and abs(x1 + L) < 1e-6)
-outlet = curves_at(lambda x0, y0, x1, y1: abs(x0 - L) < 1e-6 and abs(x1 - L) < 1e-6)
-sides = curves_at(lambda x0, y0, x1, y1: abs(y0 - y1) < 1e-6 and abs(abs(y0) - H) < 1e-6)
-wall = curves_at(lambda x0, y0, x1, y1: max(abs(x0), abs(x1), abs(y0), abs(y1)) <= r + 1e-6)
+curves = sides_of((2, s))
+inlet, outlet, sides, wall = curves["inlet"], curves["outlet"], curves["sides"], curves["wall"]
 corner = [t for _, t in gmsh.model.getBoundary([(1, c) for c in inlet], combined=False, oriented=False)
           if abs(gmsh.model.getValue(0, t, [])[1] + H) < 1e-6][0]
 shift_x = [1, 0, 0, 2 * L, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]
@@ -70,13 +78,8 @@ else:
            and abs(gmsh.model.getBoundingBox(d, t)[5] - 1.0) < 1e-6][0]
     vol = [t for d, t in ex if d == 3][0]
 
-    def faces_at(pred):
-        return [t for d, t in gmsh.model.getBoundary([(3, vol)], oriented=False) if pred(*gmsh.model.getBoundingBox(d, t))]
-
-    f_in = faces_at(lambda x0, y0, z0, x1, y1, z1: abs(x0 + L) < 1e-6 and abs(x1 + L) < 1e-6)
-    f_out = faces_at(lambda x0, y0, z0, x1, y1, z1: abs(x0 - L) < 1e-6 and abs(x1 - L) < 1e-6)
-    f_sides = faces_at(lambda x0, y0, z0, x1, y1, z1: abs(y0 - y1) < 1e-6 and abs(abs(y0) - H) < 1e-6)
-    f_wall = faces_at(lambda x0, y0, z0, x1, y1, z1: max(abs(x0), abs(x1), abs(y0), abs(y1)) <= r + 1e-6)
+    faces = sides_of((3, vol))
+    f_in, f_out, f_sides, f_wall = faces["inlet"], faces["outlet"], faces["sides"], faces["wall"]
     gmsh.model.mesh.setPeriodic(2, [top], [s], [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1])
     gmsh.model.mesh.setPeriodic(2, f_out, f_in, shift_x)
     gmsh.model.addPhysicalGroup(2, f_wall, 2, name="wall")

@@ -115,7 +115,7 @@ pub(super) struct PeriodicTags {
 /// Reads every section of an MSH 4.1 file; element types other than the
 /// `accept`ed ones are an error at their block header.
 pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
-    let mut r = Reader { bytes, pos: 0, line: 1, binary: None };
+    let mut r = Reader::ascii(bytes);
     if r.mesh_format()? == Version::V2 {
         return super::v22::parse(bytes, accept);
     }
@@ -144,7 +144,7 @@ pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
 }
 
 /// `$PhysicalNames`, text in both formats: `count`, then `dim tag "name"`.
-fn physical_names(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
+pub(super) fn physical_names(r: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
     let count: u64 = r.text("the number of physical names")?.0;
     for _ in 0..count {
         let dim: i64 = r.text("a physical group dimension")?.0;
@@ -349,7 +349,7 @@ enum Version {
 
 /// The file's items in order: text tokens with their lines, or, in the
 /// data of a binary file, numbers of fixed size at byte offsets.
-struct Reader<'a> {
+pub(super) struct Reader<'a> {
     bytes: &'a [u8],
     pos: usize,
     /// 1-based line of `pos` (text only).
@@ -359,6 +359,19 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
+    /// A reader of a text (ASCII) file from its start.
+    pub(super) fn ascii(bytes: &'a [u8]) -> Reader<'a> {
+        Reader { bytes, pos: 0, line: 1, binary: None }
+    }
+
+    /// The next word, left unread.
+    pub(super) fn peek(&mut self) -> Option<&'a [u8]> {
+        let (pos, line) = (self.pos, self.line);
+        let word = self.word().map(|w| w.0);
+        (self.pos, self.line) = (pos, line);
+        word
+    }
+
     /// `$MeshFormat`: version 4.1, ASCII (0) or binary (1) with 8-byte
     /// `size_t`, whose byte order the integer 1 that follows tells.
     /// MSH 2.x is left to [`super::v22`] right after the version.
@@ -407,7 +420,7 @@ impl<'a> Reader<'a> {
     }
 
     /// Moves past whitespace, counting line breaks.
-    fn skip_whitespace(&mut self) {
+    pub(super) fn skip_whitespace(&mut self) {
         while let Some(&b) = self.bytes.get(self.pos).filter(|b| b.is_ascii_whitespace()) {
             self.line += usize::from(b == b'\n');
             self.pos += 1;
@@ -416,7 +429,7 @@ impl<'a> Reader<'a> {
 
     /// Where the next item starts: its line in text, its byte offset in
     /// binary data (where whitespace is data, not a separator).
-    fn at(&mut self) -> Pos {
+    pub(super) fn at(&mut self) -> Pos {
         match self.binary {
             Some(_) => Pos::Byte(self.pos),
             None => {
@@ -428,7 +441,7 @@ impl<'a> Reader<'a> {
 
     /// Where the file ends, for truncation errors: its last line (not the
     /// empty one after a final line break), or its length.
-    fn end(&self) -> Pos {
+    pub(super) fn end(&self) -> Pos {
         match self.binary {
             Some(_) => Pos::Byte(self.bytes.len()),
             None => {
@@ -440,7 +453,7 @@ impl<'a> Reader<'a> {
     }
 
     /// The next whitespace-separated word and where it starts, if any.
-    fn word(&mut self) -> Option<(&'a [u8], Pos)> {
+    pub(super) fn word(&mut self) -> Option<(&'a [u8], Pos)> {
         self.skip_whitespace();
         let at = if self.binary.is_some() { Pos::Byte(self.pos) } else { Pos::Line(self.line) };
         let rest = &self.bytes[self.pos..];
@@ -450,19 +463,19 @@ impl<'a> Reader<'a> {
     }
 
     /// The next word; a truncation error naming `expected` at the end.
-    fn token(&mut self, expected: &str) -> Result<(&'a [u8], Pos), MshError> {
+    pub(super) fn token(&mut self, expected: &str) -> Result<(&'a [u8], Pos), MshError> {
         self.word().ok_or_else(|| MshError::Truncated { at: self.end(), expected: expected.to_string() })
     }
 
     /// The next word parsed as `T`.
-    fn text<T: FromStr>(&mut self, expected: &str) -> Result<(T, Pos), MshError> {
+    pub(super) fn text<T: FromStr>(&mut self, expected: &str) -> Result<(T, Pos), MshError> {
         let (word, at) = self.token(expected)?;
         let value = std::str::from_utf8(word).ok().and_then(|s| s.parse().ok());
         value.map(|v| (v, at)).ok_or_else(|| syntax(at, expected, &lossy(word)))
     }
 
     /// Requires the next word to be exactly `word`.
-    fn expect(&mut self, word: &str) -> Result<(), MshError> {
+    pub(super) fn expect(&mut self, word: &str) -> Result<(), MshError> {
         let (found, at) = self.token(word)?;
         if found == word.as_bytes() {
             Ok(())
@@ -506,7 +519,7 @@ impl<'a> Reader<'a> {
     /// A coordinate of node `tag`; NaN and infinities are refused, shown
     /// as the file spells them. The message of a bad token is only made on
     /// error: formatting one per value would dominate large files.
-    fn coordinate(&mut self, tag: u64) -> Result<(f64, Pos), MshError> {
+    pub(super) fn coordinate(&mut self, tag: u64) -> Result<(f64, Pos), MshError> {
         let (x, at, word) = match self.binary {
             Some(_) => {
                 let (x, at) = self.float("a node coordinate")?;
@@ -527,7 +540,7 @@ impl<'a> Reader<'a> {
     }
 
     /// A double-quoted string on one line (it may contain spaces).
-    fn quoted(&mut self, expected: &str) -> Result<String, MshError> {
+    pub(super) fn quoted(&mut self, expected: &str) -> Result<String, MshError> {
         self.skip_whitespace(); // text in binary files too
         let at = self.at();
         let rest = &self.bytes[self.pos..];
@@ -548,7 +561,7 @@ impl<'a> Reader<'a> {
 
     /// Skips a section this reader does not use up to its `$End<name>`,
     /// by bytes: its data may be binary.
-    fn skip_section(&mut self, name: &[u8]) -> Result<(), MshError> {
+    pub(super) fn skip_section(&mut self, name: &[u8]) -> Result<(), MshError> {
         let end = [b"$End", name].concat();
         let rest = &self.bytes[self.pos..];
         let Some(k) = rest.windows(end.len()).position(|w| w == end) else {

@@ -25,10 +25,9 @@
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
-use std::str::FromStr;
 
 use super::build::tensor_perm;
-use super::read::{Accept, Block, PeriodicTags, Raw};
+use super::read::{physical_names, Accept, Block, PeriodicTags, Raw, Reader};
 use super::write::msh_type;
 use super::{syntax, MshError, Pos};
 use crate::io::fmt_f64;
@@ -58,7 +57,7 @@ struct Line {
 /// element types other than the `accept`ed ones are an error at their
 /// line. A binary file is refused.
 pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
-    let mut t = Tokens { bytes, pos: 0, line: 1 };
+    let mut t = Reader::ascii(bytes);
     t.expect("$MeshFormat")?;
     let (version, _) = t.token("the MSH version number")?;
     let (file_type, at) = t.token("the file type (0 = ASCII)")?;
@@ -105,20 +104,8 @@ pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
     Ok(raw)
 }
 
-/// `$PhysicalNames`: `count`, then `dim tag "name"`, as in MSH 4.1.
-fn physical_names(t: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
-    let count: u64 = t.text("the number of physical names")?.0;
-    for _ in 0..count {
-        let dim: i64 = t.text("a physical group dimension")?.0;
-        let tag: i64 = t.text("a physical group tag")?.0;
-        let name = t.quoted("a quoted physical group name")?;
-        raw.physical_names.push((dim, tag, name));
-    }
-    t.expect("$EndPhysicalNames")
-}
-
 /// `$Nodes`: `count`, then `tag x y z` per node.
-fn nodes(t: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
+fn nodes(t: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
     let count: u64 = t.text("the number of nodes")?.0;
     for _ in 0..count {
         let (tag, at) = t.text::<u64>("a node tag")?;
@@ -142,7 +129,7 @@ fn nodes(t: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
 /// `$Elements`: `count`, then the element lines, copies merged: the
 /// distinct elements and their nodes (indices into `raw.nodes`, Gmsh's
 /// local order).
-fn elements(t: &mut Tokens, raw: &Raw, accept: Accept) -> Result<(Vec<Line>, Vec<usize>), MshError> {
+fn elements(t: &mut Reader, raw: &Raw, accept: Accept) -> Result<(Vec<Line>, Vec<usize>), MshError> {
     let count: u64 = t.text("the number of elements")?.0;
     let mut lines: Vec<Line> = Vec::new();
     let mut nodes: Vec<usize> = Vec::new();
@@ -199,7 +186,7 @@ fn elements(t: &mut Tokens, raw: &Raw, accept: Accept) -> Result<(Vec<Line>, Vec
 
 /// `$Periodic`: `count`, then per link `dim slave master`, an optional
 /// `Affine` and 16 values, the number of node pairs and the pairs.
-fn periodic(t: &mut Tokens, raw: &mut Raw) -> Result<(), MshError> {
+fn periodic(t: &mut Reader, raw: &mut Raw) -> Result<(), MshError> {
     let links: u64 = t.text("the number of periodic links")?.0;
     for _ in 0..links {
         let (dim, at) = t.text::<i64>("a periodic entity dimension")?;
@@ -379,117 +366,4 @@ pub fn layout_text_22(layout: &Layout) -> String {
 /// Bytes for a message (never raw: [`super::shown`] hides non-text).
 fn lossy(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
-}
-
-/// The words of a text file with their lines.
-struct Tokens<'a> {
-    bytes: &'a [u8],
-    pos: usize,
-    /// 1-based line of `pos`.
-    line: usize,
-}
-
-impl<'a> Tokens<'a> {
-    /// Moves past whitespace, counting line breaks.
-    fn skip_whitespace(&mut self) {
-        while let Some(&b) = self.bytes.get(self.pos).filter(|b| b.is_ascii_whitespace()) {
-            self.line += usize::from(b == b'\n');
-            self.pos += 1;
-        }
-    }
-
-    /// Where the next word starts.
-    fn at(&mut self) -> Pos {
-        self.skip_whitespace();
-        Pos::Line(self.line)
-    }
-
-    /// The last line of the file, for truncation errors.
-    fn end(&self) -> Pos {
-        let breaks = self.bytes.iter().filter(|&&b| b == b'\n').count();
-        let unterminated = !self.bytes.is_empty() && !self.bytes.ends_with(b"\n");
-        Pos::Line((breaks + usize::from(unterminated)).max(1))
-    }
-
-    /// The next word and where it starts, if any.
-    fn word(&mut self) -> Option<(&'a [u8], Pos)> {
-        let at = self.at();
-        let rest = &self.bytes[self.pos..];
-        let len = rest.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(rest.len());
-        self.pos += len;
-        (len > 0).then(|| (&rest[..len], at))
-    }
-
-    /// The next word, left unread.
-    fn peek(&mut self) -> Option<&'a [u8]> {
-        let (pos, line) = (self.pos, self.line);
-        let word = self.word().map(|w| w.0);
-        (self.pos, self.line) = (pos, line);
-        word
-    }
-
-    /// The next word; a truncation error naming `expected` at the end.
-    fn token(&mut self, expected: &str) -> Result<(&'a [u8], Pos), MshError> {
-        self.word().ok_or_else(|| MshError::Truncated { at: self.end(), expected: expected.to_string() })
-    }
-
-    /// The next word parsed as `T`.
-    fn text<T: FromStr>(&mut self, expected: &str) -> Result<(T, Pos), MshError> {
-        let (word, at) = self.token(expected)?;
-        let value = std::str::from_utf8(word).ok().and_then(|s| s.parse().ok());
-        value.map(|v| (v, at)).ok_or_else(|| syntax(at, expected, &lossy(word)))
-    }
-
-    /// Requires the next word to be exactly `word`.
-    fn expect(&mut self, word: &str) -> Result<(), MshError> {
-        let (found, at) = self.token(word)?;
-        if found == word.as_bytes() {
-            Ok(())
-        } else {
-            Err(syntax(at, word, &lossy(found)))
-        }
-    }
-
-    /// A coordinate of node `tag`; NaN and infinities are refused.
-    fn coordinate(&mut self, tag: u64) -> Result<(f64, Pos), MshError> {
-        let (word, at) = self.token("a node coordinate")?;
-        let parsed: Option<f64> = std::str::from_utf8(word).ok().and_then(|s| s.parse().ok());
-        let x = parsed.ok_or_else(|| syntax(at, &format!("a coordinate of node {tag}"), &lossy(word)))?;
-        if x.is_finite() {
-            Ok((x, at))
-        } else {
-            Err(MshError::NonFinite { at, tag, value: lossy(word) })
-        }
-    }
-
-    /// A double-quoted string on one line (it may contain spaces).
-    fn quoted(&mut self, expected: &str) -> Result<String, MshError> {
-        let at = self.at();
-        let rest = &self.bytes[self.pos..];
-        let Some(body) = rest.strip_prefix(b"\"") else {
-            return Err(match self.word() {
-                Some((found, _)) => syntax(at, expected, &lossy(found)),
-                None => MshError::Truncated { at, expected: expected.to_string() },
-            });
-        };
-        let line = &body[..body.iter().position(|&b| b == b'\n').unwrap_or(body.len())];
-        let Some(len) = line.iter().position(|&b| b == b'"') else {
-            let found = lossy(&rest[..line.len() + 1]);
-            return Err(syntax(at, &format!("{expected} (closing quote)"), found.trim_end()));
-        };
-        self.pos += len + 2;
-        Ok(lossy(&body[..len]))
-    }
-
-    /// Skips a section up to its `$End<name>`.
-    fn skip_section(&mut self, name: &[u8]) -> Result<(), MshError> {
-        let end = [b"$End", name].concat();
-        let rest = &self.bytes[self.pos..];
-        let Some(k) = rest.windows(end.len()).position(|w| w == end) else {
-            return Err(MshError::Truncated { at: self.end(), expected: lossy(&end) });
-        };
-        self.line += rest[..k].iter().filter(|&&b| b == b'\n').count();
-        self.pos += k + end.len();
-        Ok(())
-    }
 }
