@@ -24,6 +24,10 @@ pub struct CholeskySolver {
     symbolic: Option<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     work: MemBuffer,
+    /// Whether `l_values` and `work` are sized for `symbolic` (done by
+    /// the first `factor` after `analyze`; a system of no unknowns has
+    /// an empty factor but still needs its aligned scratch).
+    sized: bool,
     factored: bool,
     par: Par,
 }
@@ -45,6 +49,7 @@ impl CholeskySolver {
             symbolic: None,
             l_values: Vec::new(),
             work: MemBuffer::new(StackReq::empty()),
+            sized: false,
             factored: false,
             par,
         }
@@ -93,6 +98,7 @@ impl SpdSolver for CholeskySolver {
         // layer asked for 27 GB)
         self.l_values = Vec::new();
         self.work = MemBuffer::new(StackReq::EMPTY);
+        self.sized = false;
         self.symbolic = Some(symbolic);
         self.factored = false;
         Ok(())
@@ -110,13 +116,14 @@ impl SpdSolver for CholeskySolver {
         }
         self.factored = false;
         let symbolic = self.symbolic.as_ref().ok_or(SolveError::Order("analyze"))?;
-        if self.l_values.len() != symbolic.len_val() {
+        if !self.sized {
             let req = StackReq::any_of(&[
                 symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
                 symbolic.solve_in_place_scratch::<f64>(1, self.par),
             ]);
             self.l_values = vec![0.0; symbolic.len_val()];
             self.work = MemBuffer::new(req);
+            self.sized = true;
         }
         let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
         let lower = SparseColMatRef::new(pattern, &self.lower);
