@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs the whole test suite, including the checks against the real Gmsh and
-# VTK (tests/real_programs*.rs), then scripts/behaviour.sh: every case and
+# Runs the whole test suite, including the checks against the real Gmsh,
+# VTK, MFEM and meshio (tests/it: real_programs*, kept, mfem, abaqus, msh22), then scripts/behaviour.sh: every case and
 # four `curve` runs compared with the figures recorded before the redesign
 # of issue 12 (2–3 minutes), with the binary `cargo test` has just built
 # (optimised test profile: no second, release, build in CI).
@@ -9,9 +9,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if [[ -z "${DEFORMESH_PYTHON:-}" && ! -x .venv/bin/python ]]; then
-    python3 -m venv .venv
-    .venv/bin/pip install --quiet "gmsh==4.15.*" "vtk==9.7.*" "mfem==4.10.*" "meshio==5.3.*"
+if [[ -z "${DEFORMESH_PYTHON:-}" ]]; then
+    [[ -x .venv/bin/python ]] || python3 -m venv .venv
+    # an older .venv may lack the packages added since
+    if ! .venv/bin/python -c "import gmsh, vtk, mfem.ser, meshio" 2>/dev/null; then
+        .venv/bin/pip install --quiet "gmsh==4.15.*" "vtk==9.7.*" "mfem==4.10.*" "meshio==5.3.*"
+    fi
 fi
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

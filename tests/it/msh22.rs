@@ -108,20 +108,32 @@ fn same_curving<const D: usize>(dir: &Path, v41: &Path, v22: &Path, geometry: &s
     assert!(q["boundary_error"][group]["samples"].as_f64().is_some(), "{q:#}");
     // the same curved mesh, its nodes under the same tags (their order in
     // the file follows the nodes' entities, which MSH 2.2 does not give)
-    let mesh = |stem: &str| curved_by_tags::<D>(&dir.join(format!("out/{stem}{order}.msh")));
-    assert!(mesh("a") == mesh("b"), "the curved meshes differ");
+    // to round-off: bit-equal in the runs measured alone, but in one run on
+    // a loaded machine they were not (their quality figures still agreed
+    // to every digit): the parallel solves need not sum in one order
+    let ((pa, na, ca, ba), (pb, nb, cb, bb)) = (mesh::<D>(dir, "a", order), mesh::<D>(dir, "b", order));
+    assert_eq!((pa, &ca, &ba), (pb, &cb, &bb), "the curved meshes' elements differ");
+    assert_eq!(na.iter().map(|n| n.0).collect::<Vec<_>>(), nb.iter().map(|n| n.0).collect::<Vec<_>>(), "node tags");
+    let worst = na.iter().zip(&nb).flat_map(|(x, y)| x.1.iter().zip(&y.1).map(|(a, b)| (a - b).abs())).fold(0.0, f64::max);
+    eprintln!("twins p = {order}: curved nodes at most {worst:e} apart");
+    assert!(worst <= 1e-12, "curved nodes {worst:e} apart");
     b
 }
 
 /// A curved mesh file as nodes by tag, cells and boundary elements (with
 /// their parts) as node tags.
 #[allow(clippy::type_complexity)]
-fn curved_by_tags<const D: usize>(file: &Path) -> (usize, Vec<(u64, Vec<u64>)>, Vec<Vec<u64>>, Vec<(String, Vec<u64>)>) {
+/// The curved mesh `out/<stem><order>.msh` by tags.
+fn mesh<const D: usize>(dir: &Path, stem: &str, order: usize) -> (usize, Vec<(u64, Vec<f64>)>, Vec<Vec<u64>>, Vec<(String, Vec<u64>)>) {
+    curved_by_tags::<D>(&dir.join(format!("out/{stem}{order}.msh")))
+}
+
+fn curved_by_tags<const D: usize>(file: &Path) -> (usize, Vec<(u64, Vec<f64>)>, Vec<Vec<u64>>, Vec<(String, Vec<u64>)>) {
     let t = parse_any(&std::fs::read(file).unwrap(), false).unwrap();
     let m = CurvedMesh::<D>::read_msh(file).unwrap();
     let tag = |n: &usize| t.node_tags[*n];
-    let mut nodes: Vec<(u64, Vec<u64>)> = t.node_tags.iter().zip(&m.nodes).map(|(&n, x)| (n, x.iter().map(|v| v.to_bits()).collect())).collect();
-    nodes.sort_unstable();
+    let mut nodes: Vec<(u64, Vec<f64>)> = t.node_tags.iter().zip(&m.nodes).map(|(&n, x)| (n, x.to_vec())).collect();
+    nodes.sort_unstable_by_key(|n| n.0);
     let cells = m.cells.iter().map(|c| c.iter().map(tag).collect()).collect();
     let boundary = m.boundary.iter().map(|b| (m.part_names[b.part].clone(), b.nodes.iter().map(tag).collect())).collect();
     (m.p, nodes, cells, boundary)
