@@ -95,11 +95,13 @@ fn same_curving<const D: usize>(dir: &Path, v41: &Path, v22: &Path, geometry: &s
     let a = curve(dir, v41, geometry, order, &format!("a{order}"));
     let b = curve(dir, v22, geometry, order, &format!("b{order}"));
     let q = &b["quality"];
+    // every figure, to round-off: the twins number their nodes differently
+    // and the parallel solves need not sum in one order (measured on a
+    // loaded machine: first_layer_change 1.2e-13 relative apart)
     for key in ["min_det_j", "min_det_j_attained", "scaled_jacobian", "invalid_elements", "boundary_node_distance", "boundary_sample_distance", "boundary_error", "first_layer_change"] {
-        assert_eq!(a["quality"][key], q[key], "quality.{key}");
+        assert!(alike(&a["quality"][key], &q[key]), "quality.{key}: {} vs {}", a["quality"][key], q[key]);
     }
-    // everything else of the figures too
-    assert_eq!(a["quality"], *q);
+    assert!(alike(&a["quality"], q), "quality: {} vs {q}", a["quality"]);
     for key in ["cells", "unbound_groups", "reoriented_cells", "steps", "halved_steps", "algorithm2_runs"] {
         assert_eq!(a[key], b[key], "{key}");
     }
@@ -123,6 +125,20 @@ fn same_curving<const D: usize>(dir: &Path, v41: &Path, v22: &Path, geometry: &s
 /// A curved mesh file as nodes by tag, cells and boundary elements (with
 /// their parts) as node tags.
 #[allow(clippy::type_complexity)]
+/// Equal JSON, numbers to a relative 1e-9 (plus 1e-15 for round-off-size
+/// figures such as boundary distances of 1e-16).
+fn alike(a: &Value, b: &Value) -> bool {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            (x - y).abs() <= 1e-9 * x.abs().max(y.abs()) + 1e-15
+        }
+        (Value::Array(x), Value::Array(y)) => x.len() == y.len() && x.iter().zip(y).all(|(u, v)| alike(u, v)),
+        (Value::Object(x), Value::Object(y)) => x.len() == y.len() && x.iter().all(|(k, u)| y.get(k).is_some_and(|v| alike(u, v))),
+        _ => a == b,
+    }
+}
+
 /// The curved mesh `out/<stem><order>.msh` by tags.
 fn mesh<const D: usize>(dir: &Path, stem: &str, order: usize) -> (usize, Vec<(u64, Vec<f64>)>, Vec<Vec<u64>>, Vec<(String, Vec<u64>)>) {
     curved_by_tags::<D>(&dir.join(format!("out/{stem}{order}.msh")))
