@@ -18,6 +18,9 @@
 
 pub mod basis;
 pub mod order;
+pub mod shape;
+
+pub use shape::Shape;
 
 pub use basis::{hex_map, lagrange_1d, quad_map, Basis1d};
 pub use order::{
