@@ -7,9 +7,9 @@
 //! from the transport theorem, which makes `∫ div u = ∮ u·n` hold.
 
 use crate::expr::Expr;
-use crate::lsfem::{gauss_points, q1_eval, GAUSS};
+use crate::lsfem::{cell_quadrature, q1_eval, GAUSS};
 use crate::geometry::{ClosestPoint, LevelSet, Shape, Surface};
-use crate::mesh::{Point2, Point3, QuadMesh};
+use crate::mesh::{PlaneMesh, Point2, Point3};
 use crate::numeric::{cross3, dot, scale};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -441,7 +441,7 @@ pub fn normalise<const D: usize, const N: usize>(
         .map(|cell| {
             let p = cell.map(|n| nodes[n]);
             let mut acc = (0.0, 0.0);
-            for (xi, w) in gauss_points::<D>() {
+            for (xi, w) in cell_quadrature::<D, N>() {
                 let (x, det, _) = q1_eval(&p, xi);
                 let (g, gt) = field.g_checked(lift(x), t)?;
                 acc.0 += w * det / g;
@@ -496,7 +496,7 @@ fn weighted_normal<const D: usize, const K: usize>(p: &[[f64; D]; K], xi: f64, e
 }
 
 /// [`facet_flux_points`] over the boundary edges of a quad mesh.
-pub fn edge_flux_points<'a>(mesh: &'a QuadMesh, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
+pub fn edge_flux_points<'a, const N: usize>(mesh: &'a PlaneMesh<N>, nodes: &'a [Point2], velocity: &'a [Point2]) -> impl Iterator<Item = (Point2, f64)> + 'a {
     facet_flux_points(mesh.edges.iter().map(|e| e.nodes), nodes, velocity)
 }
 

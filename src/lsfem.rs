@@ -132,13 +132,39 @@ pub fn q1_corner(a: usize, d: usize) -> f64 {
     corner(a, d)
 }
 
-/// Shape functions of the reference cell `[0,1]^D` at ξ.
+/// Whether a linear cell of `N` nodes in dimension `D` is a simplex (a
+/// triangle or a tetrahedron) rather than a tensor cell (quad, hex): the
+/// kind is the node count, fixed at compile time, so each kind's loops
+/// are compiled apart and the tensor paths are unchanged.
+pub const fn is_simplex(d: usize, n: usize) -> bool {
+    n == d + 1
+}
+
+/// Reference coordinates of node `a` of a linear cell: a corner of
+/// `[0,1]^D` (tensor cells) or of the unit simplex, whose node 0 is the
+/// origin and node `k + 1` the unit vector `e_k` (Gmsh's order).
+pub fn linear_corner<const D: usize, const N: usize>(a: usize) -> [f64; D] {
+    if is_simplex(D, N) {
+        std::array::from_fn(|d| if a == d + 1 { 1.0 } else { 0.0 })
+    } else {
+        std::array::from_fn(|d| corner(a, d))
+    }
+}
+
+/// Shape functions of the linear reference cell at ξ: the Q1 functions of
+/// `[0,1]^D`, or the barycentric coordinates of the simplex.
 pub fn q1_shape<const D: usize, const N: usize>(xi: [f64; D]) -> [f64; N] {
+    if is_simplex(D, N) {
+        return std::array::from_fn(|a| if a == 0 { 1.0 - xi.iter().sum::<f64>() } else { xi[a - 1] });
+    }
     std::array::from_fn(|a| (0..D).map(|d| if corner(a, d) == 1.0 { xi[d] } else { 1.0 - xi[d] }).product())
 }
 
-/// Reference gradients: `g[d][a] = ∂N_a/∂ξ_d`.
+/// Reference gradients: `g[d][a] = ∂N_a/∂ξ_d` (constant on a simplex).
 pub fn q1_shape_gradients<const D: usize, const N: usize>(xi: [f64; D]) -> [[f64; N]; D] {
+    if is_simplex(D, N) {
+        return std::array::from_fn(|d| std::array::from_fn(|a| if a == 0 { -1.0 } else if a == d + 1 { 1.0 } else { 0.0 }));
+    }
     std::array::from_fn(|d| {
         std::array::from_fn(|a| {
             (0..D)
@@ -210,6 +236,35 @@ fn det_inverse<const D: usize>(j: &[[f64; D]; D]) -> (f64, [[f64; D]; D]) {
 /// Tensor Gauss points (2 per direction) of `[0,1]^D` with their weights.
 pub fn gauss_points<const D: usize>() -> impl Iterator<Item = ([f64; D], f64)> {
     (0..1usize << D).map(|k| (std::array::from_fn(|d| GAUSS[(k >> d) & 1]), 1.0 / (1 << D) as f64))
+}
+
+/// The degree-2 rule of the unit triangle: its three points at
+/// barycentrics (2/3, 1/6, 1/6) and rotations, weight 1/6 each.
+const TRIANGLE_RULE: [([f64; 2], f64); 3] = [([1.0 / 6.0, 1.0 / 6.0], 1.0 / 6.0), ([2.0 / 3.0, 1.0 / 6.0], 1.0 / 6.0), ([1.0 / 6.0, 2.0 / 3.0], 1.0 / 6.0)];
+/// The degree-2 rule of the unit tetrahedron: four points at barycentrics
+/// (a, b, b, b) and permutations, a = (5 + 3√5)/20, b = (5 − √5)/20,
+/// weight 1/24 each.
+const TET_A: f64 = 0.585_410_196_624_968_5;
+const TET_B: f64 = 0.138_196_601_125_010_5;
+
+/// Quadrature of the linear reference cell, exact for the products of two
+/// Q1 functions' gradients times a linear f (what Algorithm 1 integrates):
+/// [`gauss_points`] on tensor cells; on simplices the degree-2 rules
+/// (the gradients are constant there, so the rule only weighs f).
+pub fn cell_quadrature<const D: usize, const N: usize>() -> impl Iterator<Item = ([f64; D], f64)> {
+    let simplex = is_simplex(D, N);
+    let count = if !simplex { 1 << D } else { D + 1 };
+    (0..count).map(move |k| {
+        if !simplex {
+            return (std::array::from_fn(|d| GAUSS[(k >> d) & 1]), 1.0 / (1 << D) as f64);
+        }
+        if D == 2 {
+            let (x, w) = TRIANGLE_RULE[k];
+            return (std::array::from_fn(|d| x[d]), w);
+        }
+        // point k has barycentric a at vertex k (vertex 0 is the origin)
+        (std::array::from_fn(|d| if k == d + 1 { TET_A } else { TET_B }), 1.0 / 24.0)
+    })
 }
 
 /// The assembled reduced system: the symmetric matrix over the free
@@ -404,7 +459,7 @@ fn element<const D: usize, const N: usize, G: Fn([f64; D]) -> f64>(
     // m[(k·D + l)·N·N + a·N + b] = Σ_q w_q ∂_k N_a ∂_l N_b
     let mut m = [0.0; MAX_LOCAL * MAX_LOCAL];
     let mut f = [0.0; MAX_LOCAL];
-    for (xi, weight) in gauss_points::<D>() {
+    for (xi, weight) in cell_quadrature::<D, N>() {
         let (x, det, grad) = q1_eval(p, xi);
         if !(det > 0.0) {
             return Err(LsfemError::Inverted { cell: c, det });

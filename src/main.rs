@@ -417,6 +417,7 @@ fn quality_of(path: &Path) -> Result<Figures> {
         AnyMesh::Curved2(mesh) => return curved_figures((mesh, tags)),
         AnyMesh::Curved3(mesh) => return curved_figures((mesh, tags)),
         AnyMesh::Quads(m) => deformesh::quality::mesh_quality(&m),
+        AnyMesh::Triangles(m) => deformesh::quality::mesh_quality(&m),
         AnyMesh::Hexes(m) => deformesh::quality::hex_mesh_quality(&m),
     };
     q.invalid_cells = to_tags(&q.invalid_cells, &tags);

@@ -17,18 +17,19 @@
 //!   size is what the prescribed Jacobian asks for.
 
 pub mod certify;
+pub mod simplex;
 
 use crate::jacobian::{lift, JacobianField, Normalisation};
-use crate::lsfem::{gauss_points, q1_eval};
-use crate::mesh::{HexMesh, Point2, Point3, QuadMesh};
+use crate::lsfem::{cell_quadrature, q1_eval};
+use crate::mesh::{HexMesh, PlaneMesh, Point2, Point3};
 use crate::numeric::{dot, scale, sub, triple};
 use certify::{det_j_bounds, invalid_cells};
 use rayon::prelude::*;
 use serde::Serialize;
 
 /// The two edges leaving corner `a` (to the next and the previous corner).
-fn corner_edges(p: &[Point2; 4], a: usize) -> (Point2, Point2) {
-    (sub(p[(a + 1) % 4], p[a]), sub(p[(a + 3) % 4], p[a]))
+fn corner_edges<const N: usize>(p: &[Point2; N], a: usize) -> (Point2, Point2) {
+    (sub(p[(a + 1) % N], p[a]), sub(p[(a + N - 1) % N], p[a]))
 }
 
 /// det J of the bilinear map at the four corners (reference `[0,1]²`).
@@ -39,14 +40,16 @@ pub fn corner_jacobians(p: &[Point2; 4]) -> [f64; 4] {
     })
 }
 
-/// Minimum over the corners of the sine of the corner angle.
-pub fn scaled_jacobian(p: &[Point2; 4]) -> f64 {
-    let det = corner_jacobians(p);
-    (0..4)
+/// Minimum over the corners of the sine of the corner angle; on a
+/// triangle divided by sin 60°, so that the equilateral triangle gives 1
+/// as the square does (Gmsh's scaled Jacobian of a linear triangle).
+pub fn scaled_jacobian<const N: usize>(p: &[Point2; N]) -> f64 {
+    let scale = if N == 3 { 2.0 / 3f64.sqrt() } else { 1.0 };
+    (0..N)
         .map(|a| {
             let (e1, e2) = corner_edges(p, a);
             let l = e1[0].hypot(e1[1]) * e2[0].hypot(e2[1]);
-            if l > 0.0 { det[a] / l } else { 0.0 }
+            if l > 0.0 { scale * (e1[0] * e2[1] - e1[1] * e2[0]) / l } else { 0.0 }
         })
         .fold(f64::INFINITY, f64::min)
 }
@@ -94,10 +97,11 @@ pub fn hex_scaled_jacobian(p: &[Point3; 8]) -> f64 {
 }
 
 /// The (signed) size of a linear cell, area or volume: the integral of
-/// det J over `[0,1]^D`. The 2^D-point Gauss rule integrates degree 3 in
-/// each variable exactly, so it is exact for det J (degree D − 1 in each).
+/// det J over the reference cell. The 2^D-point Gauss rule integrates
+/// degree 3 in each variable exactly, so it is exact for det J (degree
+/// D − 1 in each); on a simplex det J is constant.
 pub fn cell_size<const D: usize, const N: usize>(p: &[[f64; D]; N]) -> f64 {
-    gauss_points::<D>().map(|(xi, w)| w * q1_eval(p, xi).1).sum()
+    cell_quadrature::<D, N>().map(|(xi, w)| w * q1_eval(p, xi).1).sum()
 }
 
 /// Validity and shape figures of a linear mesh (cells with corners in
@@ -165,9 +169,9 @@ pub struct MeshQuality {
     pub cell_size: Range,
 }
 
-/// Computes [`MeshQuality`] of a quad mesh.
-pub fn mesh_quality(mesh: &QuadMesh) -> MeshQuality {
-    linear_quality(&mesh.cells, &mesh.nodes, |p: &[Point2; 4]| (scaled_jacobian(p), cell_size(p)))
+/// Computes [`MeshQuality`] of a quad or triangle mesh.
+pub fn mesh_quality<const N: usize>(mesh: &PlaneMesh<N>) -> MeshQuality {
+    linear_quality(&mesh.cells, &mesh.nodes, |p: &[Point2; N]| (scaled_jacobian(p), cell_size(p)))
 }
 
 /// J/f per cell: |K_t| / ∫_{K₀} f(φ(ξ)) dξ, with φ the Q1 map from the
@@ -185,7 +189,7 @@ pub fn jf_ratios<const D: usize, const N: usize>(
         .map(|cell| {
             let (p0, p) = (cell.map(|n| start[n]), cell.map(|n| nodes[n]));
             let (mut expected, mut size) = (0.0, 0.0);
-            for (xi, w) in gauss_points::<D>() {
+            for (xi, w) in cell_quadrature::<D, N>() {
                 let (_, det0, _) = q1_eval(&p0, xi);
                 let (x, det, _) = q1_eval(&p, xi);
                 expected += w * det0 * norm.f(field, lift(x));

@@ -28,7 +28,8 @@
 
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
-use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, QuadMesh};
+use crate::mesh::element::{nodes_1d, simplex, Shape, Spacing};
+use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, PlaneMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use std::collections::HashMap;
 
@@ -44,16 +45,16 @@ pub trait Subdividable<const D: usize, const N: usize>: Q1Mesh<D, N> {
     fn assemble(nodes: Vec<[f64; D]>, cells: Vec<[usize; N]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self;
 }
 
-impl Subdividable<2, 4> for QuadMesh {
+impl<const N: usize> Subdividable<2, N> for PlaneMesh<N> {
     fn facets(&self) -> Vec<(Vec<usize>, usize)> {
         self.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect()
     }
     fn names(&self) -> &[String] {
         &self.part_names
     }
-    fn assemble(nodes: Vec<[f64; 2]>, cells: Vec<[usize; 4]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self {
+    fn assemble(nodes: Vec<[f64; 2]>, cells: Vec<[usize; N]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self {
         let edges = facets.into_iter().map(|(n, part)| BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
-        QuadMesh { nodes, cells, edges, part_names: names }
+        PlaneMesh { nodes, cells, edges, part_names: names }
     }
 }
 
@@ -88,8 +89,10 @@ enum Place {
 pub struct Subdivision<M, const D: usize> {
     /// The Q1 mesh of the p^d sub-cells of every coarse cell.
     pub fine: M,
-    /// Per coarse cell, its (p+1)^D fine nodes in tensor order (first
-    /// reference axis fastest).
+    /// The coarse cells' shape.
+    pub shape: Shape,
+    /// Per coarse cell, its fine nodes in the element's order: tensor
+    /// order (first reference axis fastest) or the simplex lattice order.
     pub elements: Vec<Vec<usize>>,
     /// Per coarse boundary facet, its (p+1)^(D−1) fine nodes in tensor
     /// order of the facet's own frame, and its part.
@@ -117,6 +120,9 @@ enum Key {
     Edge(usize, usize, usize),
     /// Coarse face in canonical cyclic order, (u, v) in its frame.
     Face([usize; 4], usize, usize),
+    /// Triangle face of tetrahedra: its corners by increasing id, and the
+    /// node's barycentric indices on them.
+    TriFace([usize; 3], [usize; 3]),
     Cell(usize, [usize; 3]),
 }
 
@@ -201,9 +207,9 @@ fn tensor_indices<const D: usize>(p: usize) -> impl Iterator<Item = [usize; D]> 
 /// Why a mesh cannot be subdivided.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SubdivideError {
-    /// Fewer than two reference nodes.
-    #[error("subdivision needs at least the two end nodes of [0, 1], got {0}")]
-    TooFewNodes(usize),
+    /// An element order outside 1..=4.
+    #[error("subdivision at the nodes of order {0}: the order must be 1..={max}", max = crate::mesh::element::MAX_ORDER)]
+    Order(usize),
     /// A boundary element is not an edge (face) of any cell.
     #[error("boundary element {index} (nodes {nodes:?}, group `{part}`) is not an edge or face of any cell")]
     NotACellFacet {
@@ -238,9 +244,11 @@ pub enum SubdivideError {
 
 /// The outward facets of a cell in cyclic order: its edges counter-
 /// clockwise (2D) or its faces counter-clockwise seen from outside (3D).
-fn cell_facets<const N: usize>(cell: &[usize; N]) -> Vec<Vec<usize>> {
-    if N == 4 {
-        (0..4).map(|k| vec![cell[k], cell[(k + 1) % 4]]).collect()
+fn cell_facets<const D: usize, const N: usize>(cell: &[usize; N]) -> Vec<Vec<usize>> {
+    if D == 2 {
+        (0..N).map(|k| vec![cell[k], cell[(k + 1) % N]]).collect()
+    } else if N == 4 {
+        Shape::Tetrahedron.faces().iter().map(|(_, f)| f.iter().map(|&k| cell[k]).collect()).collect()
     } else {
         crate::mesh::HEX_FACES.iter().map(|f| f.iter().map(|&k| cell[k]).collect()).collect()
     }
@@ -278,7 +286,7 @@ fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse
     // them in outward order
     let mut owners: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
     for cell in coarse.cells() {
-        for f in cell_facets(cell) {
+        for f in cell_facets::<D, N>(cell) {
             owners.entry(key(&f)).and_modify(|o| o.0 += 1).or_insert((1, f));
         }
     }
@@ -305,42 +313,23 @@ fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse
     Ok(out)
 }
 
-/// Splits every cell of `coarse` at the 1D reference nodes `t` (p + 1
-/// values in [0, 1] from 0 to 1, e.g. equispaced or Gauss–Lobatto).
+/// Splits every cell of `coarse` at the nodes of its order-`p` Lagrange
+/// element with nodes at `spacing` (on tensor cells the products of the
+/// 1D nodes, on simplices the simplex node set of
+/// [`crate::mesh::element::simplex`], whose edges carry the same 1D
+/// nodes, so a triangle and a quad next to it share their edge's nodes).
 /// Boundary facets are checked against the cells and oriented like them.
-pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M, t: &[f64]) -> Result<Subdivision<M, D>, SubdivideError> {
-    if t.len() < 2 {
-        return Err(SubdivideError::TooFewNodes(t.len()));
-    }
-    let p = t.len() - 1;
+pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M, p: usize, spacing: Spacing) -> Result<Subdivision<M, D>, SubdivideError> {
+    let t = nodes_1d(p, spacing).map_err(|_| SubdivideError::Order(p))?;
     let coarse_facets = oriented_facets(coarse)?;
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; D]> = Vec::new();
-    let mut elements = Vec::with_capacity(coarse.cells().len());
-    for (c, cell) in coarse.cells().iter().enumerate() {
-        let corners = cell.map(|n| coarse.nodes()[n]);
-        let element: Vec<usize> = tensor_indices::<D>(p)
-            .map(|idx| {
-                *ids.entry(cell_key::<D, N>(c, cell, idx, p)).or_insert_with(|| {
-                    let xi: [f64; D] = std::array::from_fn(|d| t[idx[d]]);
-                    let shape = crate::lsfem::q1_shape::<D, N>(xi);
-                    nodes.push(std::array::from_fn(|k| (0..N).map(|a| shape[a] * corners[a][k]).sum()));
-                    nodes.len() - 1
-                })
-            })
-            .collect();
-        elements.push(element);
-    }
+    let (elements, sub_cells) = if crate::lsfem::is_simplex(D, N) {
+        simplex_elements(coarse, p, spacing, &mut ids, &mut nodes)
+    } else {
+        tensor_elements(coarse, &t, &mut ids, &mut nodes)
+    };
     let n1 = p + 1;
-    let sub_cells: Vec<[usize; N]> = elements
-        .iter()
-        .flat_map(|el| {
-            tensor_indices::<D>(p - 1).map(move |idx| {
-                let at = |off: [usize; D]| el[(0..D).map(|d| (idx[d] + off[d]) * n1.pow(d as u32)).sum::<usize>()];
-                std::array::from_fn(|a| at(std::array::from_fn(|d| usize::from(crate::lsfem::q1_corner(a, d) == 1.0))))
-            })
-        })
-        .collect();
     let mut places = vec![Place::Interior; nodes.len()];
     let mut facets = Vec::new();
     let mut fine_facets = Vec::new();
@@ -397,7 +386,112 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
         places[n] = Place::Vertex;
     }
     let fine = M::assemble(nodes, sub_cells, fine_facets, coarse.names().to_vec());
-    Ok(Subdivision { fine, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets })
+    let shape = linear_shape::<D, N>();
+    Ok(Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets })
+}
+
+/// The fine nodes of every tensor cell (in tensor order), made or found
+/// by their keys, and the p^D Q1 sub-cells.
+fn tensor_elements<M: Subdividable<D, N>, const D: usize, const N: usize>(
+    coarse: &M,
+    t: &[f64],
+    ids: &mut HashMap<Key, usize>,
+    nodes: &mut Vec<[f64; D]>,
+) -> (Vec<Vec<usize>>, Vec<[usize; N]>) {
+    let p = t.len() - 1;
+    let mut elements = Vec::with_capacity(coarse.cells().len());
+    for (c, cell) in coarse.cells().iter().enumerate() {
+        let corners = cell.map(|n| coarse.nodes()[n]);
+        let element: Vec<usize> = tensor_indices::<D>(p)
+            .map(|idx| {
+                *ids.entry(cell_key::<D, N>(c, cell, idx, p)).or_insert_with(|| {
+                    let xi: [f64; D] = std::array::from_fn(|d| t[idx[d]]);
+                    nodes.push(at_reference(&corners, xi));
+                    nodes.len() - 1
+                })
+            })
+            .collect();
+        elements.push(element);
+    }
+    let n1 = p + 1;
+    let sub_cells: Vec<[usize; N]> = elements
+        .iter()
+        .flat_map(|el| {
+            tensor_indices::<D>(p - 1).map(move |idx| {
+                let at = |off: [usize; D]| el[(0..D).map(|d| (idx[d] + off[d]) * n1.pow(d as u32)).sum::<usize>()];
+                std::array::from_fn(|a| at(std::array::from_fn(|d| usize::from(crate::lsfem::q1_corner(a, d) == 1.0))))
+            })
+        })
+        .collect();
+    (elements, sub_cells)
+}
+
+/// The shape of a linear cell of `N` nodes in dimension `D`.
+pub fn linear_shape<const D: usize, const N: usize>() -> Shape {
+    match (D, N) {
+        (2, 3) => Shape::Triangle,
+        (2, _) => Shape::Quadrilateral,
+        (_, 4) => Shape::Tetrahedron,
+        _ => Shape::Hexahedron,
+    }
+}
+
+/// The point of the linear cell with `corners` at reference coordinates ξ.
+fn at_reference<const D: usize, const N: usize>(corners: &[[f64; D]; N], xi: [f64; D]) -> [f64; D] {
+    let shape = crate::lsfem::q1_shape::<D, N>(xi);
+    std::array::from_fn(|k| (0..N).map(|a| shape[a] * corners[a][k]).sum())
+}
+
+/// The fine nodes of every triangle or tetrahedron (in the simplex
+/// lattice order of [`crate::mesh::element::simplex`]), made or found by
+/// their keys, and the p^D sub-simplices of each, oriented like it.
+fn simplex_elements<M: Subdividable<D, N>, const D: usize, const N: usize>(
+    coarse: &M,
+    p: usize,
+    spacing: Spacing,
+    ids: &mut HashMap<Key, usize>,
+    nodes: &mut Vec<[f64; D]>,
+) -> (Vec<Vec<usize>>, Vec<[usize; N]>) {
+    let shape = linear_shape::<D, N>();
+    let space = simplex::space(shape, p, spacing).expect("the order was checked");
+    let lattice = simplex::lattice(shape, p);
+    let mut elements = Vec::with_capacity(coarse.cells().len());
+    for (c, cell) in coarse.cells().iter().enumerate() {
+        let corners = cell.map(|n| coarse.nodes()[n]);
+        let element: Vec<usize> = lattice
+            .iter()
+            .zip(&space.nodes)
+            .map(|(idx, xi)| {
+                *ids.entry(simplex_key::<D, N>(c, cell, *idx, p)).or_insert_with(|| {
+                    nodes.push(at_reference(&corners, std::array::from_fn(|d| xi[d])));
+                    nodes.len() - 1
+                })
+            })
+            .collect();
+        elements.push(element);
+    }
+    let subs = simplex::sub_simplices(shape, p);
+    let sub_cells = elements.iter().flat_map(|el| subs.iter().map(move |s| std::array::from_fn(|a| el[s[a]]))).collect();
+    (elements, sub_cells)
+}
+
+/// The key of lattice node `idx` (i, j, k) of simplex `c` with corners
+/// `cell`: its barycentric indices (p − i − j − k, i, j, k) name the
+/// vertex, edge, face or cell it is inside of, by the corners whose index
+/// is not 0, so neighbours find the same node.
+fn simplex_key<const D: usize, const N: usize>(c: usize, cell: &[usize; N], idx: [usize; 3], p: usize) -> Key {
+    let bary: [usize; N] = std::array::from_fn(|a| if a == 0 { p - idx[..D].iter().sum::<usize>() } else { idx[a - 1] });
+    let on: Vec<usize> = (0..N).filter(|&a| bary[a] != 0).collect();
+    match on.len() {
+        1 => Key::Vertex(cell[on[0]]),
+        2 => edge_key(cell[on[0]], cell[on[1]], bary[on[1]], p),
+        3 if N == 4 => {
+            let mut by_id: Vec<(usize, usize)> = on.iter().map(|&a| (cell[a], bary[a])).collect();
+            by_id.sort_unstable();
+            Key::TriFace([by_id[0].0, by_id[1].0, by_id[2].0], [by_id[0].1, by_id[1].1, by_id[2].1])
+        }
+        _ => Key::Cell(c, idx),
+    }
 }
 
 /// How far the settling pass lets nodes move, in multiples of its largest
@@ -1036,16 +1130,13 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn equispaced(p: usize) -> Vec<f64> {
-        (0..=p).map(|k| k as f64 / p as f64).collect()
-    }
+    use crate::mesh::QuadMesh;
 
     #[test]
     fn quad_subdivision_shares_nodes_and_counts_match() {
         let coarse = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 2);
         for p in 1..=4 {
-            let s = subdivide(&coarse, &equispaced(p)).unwrap();
+            let s = subdivide(&coarse, p, Spacing::Equispaced).unwrap();
             // a structured (3p+1)×(2p+1) grid
             assert_eq!(s.fine.nodes.len(), (3 * p + 1) * (2 * p + 1), "p = {p}");
             assert_eq!(s.fine.cells.len(), 6 * p * p);
@@ -1075,7 +1166,7 @@ mod tests {
         coarse.cells.iter_mut().for_each(|c| *c = c.map(|v| n - 1 - v));
         coarse.faces.iter_mut().for_each(|f| f.nodes = f.nodes.map(|v| n - 1 - v));
         for p in 1..=3 {
-            let s = subdivide(&coarse, &equispaced(p)).unwrap();
+            let s = subdivide(&coarse, p, Spacing::Equispaced).unwrap();
             assert_eq!(s.fine.nodes.len(), (2 * p + 1).pow(3), "p = {p}");
             assert_eq!(s.fine.faces.len(), 6 * 4 * p * p);
             assert!(crate::quality::certify::invalid_cells(&s.fine.cells, &s.fine.nodes).is_empty());
@@ -1095,7 +1186,7 @@ mod tests {
         let mut coarse = QuadMesh::structured_box([0.0, 0.0], [2.0, 1.0], 2, 1);
         // flip one boundary edge: it is turned back to the cell's orientation
         coarse.edges[0].nodes.reverse();
-        let s = subdivide(&coarse, &equispaced(2)).unwrap();
+        let s = subdivide(&coarse, 2, Spacing::Equispaced).unwrap();
         let flux: f64 = crate::jacobian::edge_flux_points(&s.fine, &s.fine.nodes, &vec![[1.0, 0.0]; s.fine.nodes.len()]).map(|x| x.1).sum();
         // a uniform velocity has no net flux through a closed, consistently
         // oriented boundary
@@ -1103,18 +1194,18 @@ mod tests {
         // a diagonal is no cell edge
         let mut bad = coarse.clone();
         bad.edges[0].nodes = [0, 4];
-        assert!(matches!(subdivide(&bad, &equispaced(2)), Err(SubdivideError::NotACellFacet { index: 0, .. })));
+        assert!(matches!(subdivide(&bad, 2, Spacing::Equispaced), Err(SubdivideError::NotACellFacet { index: 0, .. })));
         // a boundary edge left out: its nodes would move freely
         let mut open = coarse.clone();
         open.edges.remove(3);
-        let e = subdivide(&open, &equispaced(2)).err().expect("uncovered");
+        let e = subdivide(&open, 2, Spacing::Equispaced).err().expect("uncovered");
         assert!(matches!(e, SubdivideError::Uncovered { count: 1, .. }), "{e}");
-        assert!(matches!(subdivide(&coarse, &[0.5]), Err(SubdivideError::TooFewNodes(1))));
+        assert!(matches!(subdivide(&coarse, 0, Spacing::Equispaced), Err(SubdivideError::Order(0))));
         // the edge between the two cells in a group: refused, naming it
         let mut inner = coarse.clone();
         let shared: Vec<usize> = (0..coarse.nodes.len()).filter(|&n| coarse.cells[0].contains(&n) && coarse.cells[1].contains(&n)).collect();
         inner.edges.push(BoundaryEdge { nodes: [shared[0], shared[1]], part: 0 });
-        let e = subdivide(&inner, &equispaced(2)).err().expect("interior");
+        let e = subdivide(&inner, 2, Spacing::Equispaced).err().expect("interior");
         assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
         assert!(e.to_string().contains(&format!("group `{}`", coarse.part_names[0])) && e.to_string().contains("inside the mesh"), "{e}");
         // and a hex face between two cells
@@ -1129,7 +1220,7 @@ mod tests {
         });
         face.nodes = [sq[0], sq[1], sq[2], sq[3]];
         hex.faces.push(face);
-        let e = subdivide(&hex, &equispaced(2)).err().expect("interior face");
+        let e = subdivide(&hex, 2, Spacing::Equispaced).err().expect("interior face");
         assert!(matches!(e, SubdivideError::InteriorFacet { .. }), "{e}");
     }
 
@@ -1155,7 +1246,7 @@ mod tests {
                 })
                 .collect()
         };
-        let s = subdivide(&mesh, &equispaced(2)).unwrap();
+        let s = subdivide(&mesh, 2, Spacing::Equispaced).unwrap();
         let r = 1.5f64.sqrt();
         let two = parts_with(sphere([0.0, 0.5, 0.5], r), sphere([0.5, 0.0, 0.5], r));
         let e = s.refine_mesh().boundary(refine_parts(&two)).err().expect("refused").to_string();
@@ -1170,7 +1261,7 @@ mod tests {
         for f in coarse.faces.iter_mut() {
             f.nodes.reverse();
         }
-        let s = subdivide(&coarse, &equispaced(2)).unwrap();
+        let s = subdivide(&coarse, 2, Spacing::Equispaced).unwrap();
         // every fine face's normal points away from the centre
         for f in &s.fine.faces {
             let p = f.nodes.map(|n| s.fine.nodes[n]);

@@ -14,7 +14,7 @@ use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
-use crate::mesh::{quad_area, HexMesh, Point2, Point3, QuadMesh};
+use crate::mesh::{polygon_area, HexMesh, PlaneMesh, Point2, Point3};
 use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
@@ -282,11 +282,21 @@ pub struct Look<'a, const D: usize> {
     pub output: &'a OutputSpec,
 }
 
-impl Outputs<2, 4> for QuadMesh {
-    const DEFINITIONS: Definitions = Definitions {
-        det_j: "determinant of the bilinear map from the reference square [0,1]^2, at cell corners (Gmsh's [-1,1]^2 gives 1/4 of it)",
-        scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|), the sine of the corner angle",
-        jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2 Gauss); 1 is perfect",
+/// Quads and triangles share the plane's outputs; only the words of the
+/// figures differ.
+impl<const N: usize> Outputs<2, N> for PlaneMesh<N> {
+    const DEFINITIONS: Definitions = if N == 3 {
+        Definitions {
+            det_j: "determinant of the linear map from the reference triangle (0,0),(1,0),(0,1), constant on a cell (Gmsh's reference triangle is the same)",
+            scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|) divided by sin 60 degrees: 1 for the equilateral triangle",
+            jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (3-point rule, exact for quadratic f); 1 is perfect",
+        }
+    } else {
+        Definitions {
+            det_j: "determinant of the bilinear map from the reference square [0,1]^2, at cell corners (Gmsh's [-1,1]^2 gives 1/4 of it)",
+            scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|), the sine of the corner angle",
+            jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2 Gauss); 1 is perfect",
+        }
     };
     fn quality(&self) -> MeshQuality {
         mesh_quality(self)
@@ -295,7 +305,7 @@ impl Outputs<2, 4> for QuadMesh {
         (0..self.num_cells()).map(|c| scaled_jacobian(&self.cell_coords(c))).collect()
     }
     fn cell_sizes(&self, nodes: &[Point2]) -> Vec<f64> {
-        self.cells.iter().map(|c| quad_area(&c.map(|n| nodes[n]))).collect()
+        self.cells.iter().map(|c| polygon_area(&c.map(|n| nodes[n]))).collect()
     }
     fn msh(&self) -> String {
         msh_string(self)
@@ -690,17 +700,27 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
             let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
             curve_mesh(&mesh, &parts, (unbound, &shared), 0, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3)))
         }
-        AnyMesh::Quads(mut mesh) => {
-            // Gmsh may write a surface's quads clockwise (by its normal)
-            let turned = mesh.orient_counter_clockwise();
-            let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, &gfile)?;
-            geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), &gfile)?;
-            let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
-            curve_mesh(&mesh, &parts, (unbound, &shared), turned, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2)))
-        }
+        AnyMesh::Quads(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
+        AnyMesh::Triangles(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
+}
+
+/// `curve` on a plane mesh of quads or triangles.
+fn curve_plane<const N: usize>(
+    mut mesh: PlaneMesh<N>,
+    geometry: &crate::app::bind::GeometryFile,
+    gfile: &str,
+    job: (&CurveJob, &crate::io::layout::Layout),
+    progress: &mut impl FnMut(Progress),
+) -> Result<CurveReport, RunError> {
+    // Gmsh may write a surface's cells clockwise (by its normal)
+    let turned = mesh.orient_counter_clockwise();
+    let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, gfile)?;
+    geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), gfile)?;
+    let (mesh, shared) = one_group_per_facet(&mesh, &unbound, gfile)?;
+    curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, progress)
 }
 
 /// The curved mesh in the job's format: the layout (every group, entity,

@@ -5,7 +5,7 @@
 use super::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::jacobian::edge_flux_points;
 use crate::lsfem::NodeConstraint;
-use crate::mesh::{Point2, QuadMesh};
+use crate::mesh::{PlaneMesh, Point2};
 
 /// A maximal run of boundary edges of one part between feature nodes,
 /// parametrised by normalised arc length s ∈ [0, 1] of its start position.
@@ -307,7 +307,7 @@ impl Chains {
 }
 
 /// Splits the boundary into chains and gives every node its role.
-fn classify(mesh: &QuadMesh, parts: &[BoundaryPart]) -> (Vec<Chain>, Vec<Role>) {
+fn classify<const N: usize>(mesh: &PlaneMesh<N>, parts: &[BoundaryPart]) -> (Vec<Chain>, Vec<Role>) {
     let n = mesh.num_nodes();
     // per node, outgoing and incoming edge (per part) to walk chains
     let mut next: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n]; // (part, to)
@@ -418,10 +418,12 @@ impl BoundaryModel<2> for Chains {
     }
 }
 
-impl Q1Mesh<2, 4> for QuadMesh {
+/// The boundary model works on the edges alone, so quads and triangles
+/// share it.
+impl<const N: usize> Q1Mesh<2, N> for PlaneMesh<N> {
     type Boundary = Chains;
 
-    fn cells(&self) -> &[[usize; 4]] {
+    fn cells(&self) -> &[[usize; N]] {
         &self.cells
     }
     fn nodes(&self) -> &[Point2] {
@@ -456,7 +458,7 @@ mod tests {
     /// groups; with one circle (bound twice) accepted.
     #[test]
     fn two_moving_parts_meeting_at_a_corner() {
-        let mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 3);
+        let mesh = crate::mesh::QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 3);
         let circle = |centre: [f64; 2], radius: f64| -> Arc<dyn super::super::BoundaryShape<2>> { Arc::new(ShapeSpec::Circle { centre, radius }.build().unwrap()) };
         let parts_with = |a: Arc<dyn super::super::BoundaryShape<2>>, b: Arc<dyn super::super::BoundaryShape<2>>| -> Vec<BoundaryPart> {
             crate::mesh::BOX_SIDES

@@ -12,7 +12,7 @@
 //! rotation, which the flow of a sliding wall makes across thin boundary
 //! layers and which keeps det J, does not cut the step.
 
-use crate::lsfem::{q1_corner, q1_eval};
+use crate::lsfem::{linear_corner, q1_eval};
 use rayon::prelude::*;
 
 /// The largest step h ≤ `h_max` for which det(I + s ∇u) stays within
@@ -42,7 +42,7 @@ pub fn corner_ratio_range<const D: usize, const N: usize>(cells: &[[usize; N]], 
             let p: [[f64; D]; N] = std::array::from_fn(|a| before[cell[a]]);
             let q: [[f64; D]; N] = std::array::from_fn(|a| after[cell[a]]);
             (0..N).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), a| {
-                let xi = std::array::from_fn(|d| q1_corner(a, d));
+                let xi = linear_corner::<D, N>(a);
                 let d0 = q1_eval::<D, N>(&p, xi).1;
                 if d0 <= 0.0 {
                     return (lo, hi);
@@ -56,7 +56,7 @@ pub fn corner_ratio_range<const D: usize, const N: usize>(cells: &[[usize; N]], 
 
 /// [`max_step`] at corner `a` of one cell.
 fn corner_step<const D: usize, const N: usize>(p: &[[f64; D]; N], v: &[[f64; D]; N], a: usize, c: f64, h_max: f64) -> f64 {
-    let xi = std::array::from_fn(|d| q1_corner(a, d));
+    let xi = linear_corner::<D, N>(a);
     let (_, det, g) = q1_eval::<D, N>(p, xi);
     if det <= 0.0 {
         return h_max;

@@ -8,8 +8,9 @@
 //! bounds of its det J, and the curved boundary is sampled against the
 //! exact shapes.
 
-use super::{check_order, nodes_1d, Basis1d, HighOrderError, Spacing};
-use crate::quality::certify::{Certificate, Certifier, CertifyOptions};
+use super::{check_order, Basis1d, HighOrderError, Spacing};
+use crate::mesh::element::Shape;
+use crate::quality::certify::{Certificate, CertifyOptions, ElementCertifier};
 use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
 use crate::mesh::{CurvedBoundary, CurvedMesh};
@@ -304,7 +305,7 @@ pub const DRIFT_LIMIT: f64 = 1.0;
 /// The elements with a node on a curved facet, watched during a sliding
 /// run of Algorithm 2.
 struct Watch {
-    certifier: Certifier,
+    certifier: ElementCertifier,
     elements: Vec<Vec<usize>>,
     /// Per node of a curved facet of a watched element, the node one row
     /// in from it and their distance at the start: the first rows'
@@ -321,8 +322,8 @@ impl Watch {
             }
         }
         let elements: Vec<Vec<usize>> = sub.elements.iter().filter(|e| e.iter().any(|&n| on[n])).cloned().collect();
-        let rows = first_rows::<D>(&elements, sub.p, &on, sub.fine.nodes());
-        Ok(Watch { certifier: Certifier::new(sub.p, spacing)?, elements, rows })
+        let rows = first_rows::<D>(sub.shape, &elements, sub.p, &on, sub.fine.nodes());
+        Ok(Watch { certifier: ElementCertifier::new(sub.shape, sub.p, spacing)?, elements, rows })
     }
 
     /// The largest relative change of a first row's height since the start.
@@ -344,21 +345,36 @@ impl Watch {
     }
 }
 
-/// Per node of a face of `elements` (tensor-ordered, order p) that lies
-/// on the boundary (`on`), the node one row in from it and their distance.
-fn first_rows<const D: usize>(elements: &[Vec<usize>], p: usize, on: &[bool], nodes: &[[f64; D]]) -> Vec<(usize, usize, f64)> {
+/// Per node of a face of `elements` (order p, of `shape`) that lies on
+/// the boundary (`on`), the node one row in from it and their distance.
+fn first_rows<const D: usize>(shape: Shape, elements: &[Vec<usize>], p: usize, on: &[bool], nodes: &[[f64; D]]) -> Vec<(usize, usize, f64)> {
     let mut rows = Vec::new();
+    let faces = element_faces::<D>(shape, p, 1);
     for e in elements {
-        for d in 0..D {
-            for side in [0, p] {
-                let column: Vec<(usize, usize, bool)> = face_columns::<D>(e, p, d, side, 1).collect();
-                if column.iter().all(|&(a, _, _)| on[a]) {
-                    rows.extend(column.iter().map(|&(a, b, _)| (a, b, crate::numeric::dist2(nodes[a], nodes[b]).sqrt())));
-                }
+        for face in &faces {
+            if face.iter().all(|&(a, _, _)| on[e[a]]) {
+                rows.extend(face.iter().map(|&(a, b, _)| (e[a], e[b], crate::numeric::dist2(nodes[e[a]], nodes[e[b]]).sqrt())));
             }
         }
     }
     rows
+}
+
+/// The faces (edges in 2D) of an order-p element of `shape`, in local
+/// node numbers: per node of the face, the node `depth` rows in from it
+/// (`depth` = p: across the element) and whether it is a corner.
+fn element_faces<const D: usize>(shape: Shape, p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
+    if shape.is_simplex() {
+        return (0..=D).map(|opp| simplex_face_columns(shape, p, opp, depth)).collect();
+    }
+    let local: Vec<usize> = (0..(p + 1).pow(D as u32)).collect();
+    let mut out = Vec::new();
+    for d in 0..D {
+        for side in [0, p] {
+            out.push(face_columns::<D>(&local, p, d, side, depth).collect());
+        }
+    }
+    out
 }
 
 /// The nodes of face `side` (0 or p) across axis `d` of the tensor-ordered
@@ -372,6 +388,40 @@ fn face_columns<const D: usize>(el: &[usize], p: usize, d: usize, side: usize, d
         let inner = if side == 0 { l + step } else { l - step };
         (el[l], el[inner], (0..D).all(|a| index(l, a) % p == 0))
     })
+}
+
+/// The face of a simplex element (lattice order) opposite vertex `opp`:
+/// per node of it (barycentric index 0 at `opp`), the node `depth` rows
+/// towards `opp` (taken from its largest other barycentric index, so it
+/// stays in the element; `depth` = p reaches the vertex `opp` itself) and
+/// whether it is a vertex.
+fn simplex_face_columns(shape: Shape, p: usize, opp: usize, depth: usize) -> Vec<(usize, usize, bool)> {
+    let lattice = crate::mesh::element::simplex::lattice(shape, p);
+    let dim = shape.dim();
+    let bary = |l: &[usize; 3]| -> [usize; 4] { std::array::from_fn(|a| if a == 0 { p - l[..dim].iter().sum::<usize>() } else if a <= dim { l[a - 1] } else { 0 }) };
+    let position: std::collections::HashMap<[usize; 4], usize> = lattice.iter().enumerate().map(|(k, l)| (bary(l), k)).collect();
+    let mut out = Vec::new();
+    for (k, l) in lattice.iter().enumerate() {
+        let b = bary(l);
+        if b[opp] != 0 {
+            continue;
+        }
+        let mut inner = b;
+        let mut left = depth;
+        while left > 0 {
+            // one step towards opp from the largest other index
+            let from = (0..=dim).filter(|&a| a != opp).max_by_key(|&a| (inner[a], std::cmp::Reverse(a))).expect("a face has vertices");
+            if inner[from] == 0 {
+                break;
+            }
+            inner[from] -= 1;
+            inner[opp] += 1;
+            left -= 1;
+        }
+        let corner = b.iter().filter(|&&x| x != 0).count() == 1;
+        out.push((k, position[&inner], corner));
+    }
+    out
 }
 
 /// What the settling pass did ([`CurveOptions::settle`]).
@@ -437,12 +487,15 @@ pub struct Curved<const D: usize> {
 /// Certifies every element; returns the certificates and the summary
 /// without the boundary figures.
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
-    let certifier = Certifier::new(mesh.p, mesh.spacing)?;
+    let certifier = ElementCertifier::new(mesh.shape, mesh.p, mesh.spacing)?;
+    let per_cell = mesh.nodes_per_cell();
     let certs: Vec<Certificate> = (0..mesh.cells.len())
         .into_par_iter()
         .map(|c| {
             let ctrl = mesh.cell_coords(c);
-            crate::mesh::element::check_nodes(mesh.p, D, ctrl.len())?;
+            if ctrl.len() != per_cell {
+                return Err(HighOrderError::NodeCount { order: mesh.p, dim: D, expected: per_cell, found: ctrl.len() });
+            }
             Ok(certifier.certify(&ctrl, &CertifyOptions::default()))
         })
         .collect::<Result<_, HighOrderError>>()?;
@@ -505,7 +558,7 @@ where
     }
     let p = opts.order;
     let clock = Instant::now();
-    let sub = subdivide(coarse, &nodes_1d(p, opts.spacing)?)?;
+    let sub = subdivide(coarse, p, opts.spacing)?;
     let dirichlet_parts = with_dirichlet_data(&parts2);
     if opts.dirichlet {
         parts2 = dirichlet_parts.clone();
@@ -692,6 +745,7 @@ impl<M, const D: usize> Runner<'_, M, D> {
             return Ok(Err(SlidingLeft { elements: inverted, t: def.t, first_row_drift: drift }));
         }
         let mesh = CurvedMesh {
+            shape: self.sub.shape,
             p: self.sub.p,
             spacing: self.spacing,
             nodes: def.mesh.mesh.nodes().to_vec(),
@@ -825,7 +879,7 @@ where
     let snapped = CurvedMesh { nodes, ..slid.mesh.clone() };
     let mut certificates = slid.certificates.clone();
     let touched: Vec<usize> = (0..snapped.cells.len()).filter(|&c| snapped.cells[c].iter().any(|&n| snapped.nodes[n] != slid.mesh.nodes[n])).collect();
-    let certifier = Certifier::new(snapped.p, snapped.spacing)?;
+    let certifier = ElementCertifier::new(snapped.shape, snapped.p, snapped.spacing)?;
     let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certifier.certify(&snapped.cell_coords(c), &CertifyOptions::default())).collect();
     // a snap that shears a thin cell stays valid but ruins it (measured:
     // a 1e-5 layer at p = 4, min scaled Jacobian 0.72 → 0.001): snapping
@@ -871,45 +925,31 @@ fn largest_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> f64 {
 pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64; D]], parts: &[BoundaryPart<D>]) -> BTreeMap<String, FirstLayer> {
     use std::collections::HashMap;
     let p = mesh.p;
-    let n1 = p + 1;
-    let lin = |idx: [usize; 3]| (0..D).map(|d| idx[d] * n1.pow(d as u32)).sum::<usize>();
     let corners_key = |mut k: Vec<usize>| {
         k.sort_unstable();
         k
     };
-    // every element face by its sorted corner nodes: (element, axis, side)
-    let mut faces: HashMap<Vec<usize>, (usize, usize, usize)> = HashMap::new();
+    // the element's faces, each node with the node across the element
+    let across = element_faces::<D>(mesh.shape, p, p);
+    let facet_corners = corner_positions(mesh.shape.facet_shape(), p);
+    // every element face by its sorted corner nodes: (element, face)
+    let mut faces: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
     for (e, el) in mesh.cells.iter().enumerate() {
-        for d in 0..D {
-            for side in [0, p] {
-                let corners: Vec<usize> = (0..1usize << (D - 1))
-                    .map(|b| {
-                        let mut idx = [0; 3];
-                        let mut bit = 0;
-                        for a in 0..D {
-                            idx[a] = if a == d {
-                                side
-                            } else {
-                                bit += 1;
-                                p * ((b >> (bit - 1)) & 1)
-                            };
-                        }
-                        el[lin(idx)]
-                    })
-                    .collect();
-                faces.insert(corners_key(corners), (e, d, side));
-            }
+        for (f, face) in across.iter().enumerate() {
+            let corners: Vec<usize> = face.iter().filter(|c| c.2).map(|c| el[c.0]).collect();
+            faces.insert(corners_key(corners), (e, f));
         }
     }
     let dist = |x: &[[f64; D]], a: usize, b: usize| (0..D).map(|k| (x[a][k] - x[b][k]).powi(2)).sum::<f64>().sqrt();
     let mut out = BTreeMap::new();
     for b in &mesh.boundary {
         let Some(PartKind::Move { .. }) = parts.get(b.part).map(|q| &q.kind) else { continue };
-        let grid_corners = if D == 2 { vec![b.nodes[0], b.nodes[p]] } else { vec![b.nodes[0], b.nodes[p], b.nodes[n1 * n1 - 1], b.nodes[n1 * p]] };
-        let Some(&(e, d, side)) = faces.get(&corners_key(grid_corners)) else { continue };
+        let grid_corners = facet_corners.iter().map(|&c| b.nodes[c]).collect();
+        let Some(&(e, f)) = faces.get(&corners_key(grid_corners)) else { continue };
         let mut worst = FirstLayer::default();
         // each face node and the node across the cell from it
-        for (node, opp, corner) in face_columns::<D>(&mesh.cells[e], p, d, side, p) {
+        let el = &mesh.cells[e];
+        for (node, opp, corner) in across[f].iter().map(|&(a, b, c)| (el[a], el[b], c)) {
             let (h0, h) = (dist(straight, node, opp), dist(&mesh.nodes, node, opp));
             let change = (h / h0 - 1.0).abs();
             worst.all_nodes = worst.all_nodes.max(change);
@@ -923,6 +963,17 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
         w.all_nodes = w.all_nodes.max(worst.all_nodes);
     }
     out
+}
+
+/// Local indices of the corners of an order-p boundary element of
+/// `shape` (a line, a quad in tensor order, a triangle in lattice order).
+fn corner_positions(shape: Shape, p: usize) -> Vec<usize> {
+    let n1 = p + 1;
+    match shape {
+        Shape::Line => vec![0, p],
+        Shape::Triangle => vec![0, p, n1 * (n1 + 1) / 2 - 1],
+        _ => vec![0, p, n1 * n1 - 1, n1 * p],
+    }
 }
 
 /// Per curved group, the boundary error: the largest distance of its nodes

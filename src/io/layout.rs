@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use thiserror::Error;
 
+use crate::mesh::element::simplex;
 use crate::mesh::CurvedMesh;
 
 /// Name of the physical group that holds all cells of a mesh the crate
@@ -47,40 +48,13 @@ pub struct Entity {
     pub bounding: Vec<i64>,
 }
 
-/// The kinds of element a layout holds (the reference shapes of the
-/// quad/hex method and their faces).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Shape {
-    /// One node.
-    Point,
-    /// A segment.
-    Line,
-    /// A quadrilateral.
-    Quad,
-    /// A hexahedron.
-    Hex,
-}
+/// The kinds of element a layout holds: the element table's shapes.
+pub use crate::mesh::element::Shape;
 
-impl Shape {
-    /// Its dimension.
-    pub fn dim(self) -> usize {
-        match self {
-            Shape::Point => 0,
-            Shape::Line => 1,
-            Shape::Quad => 2,
-            Shape::Hex => 3,
-        }
-    }
-
-    /// The tensor-product shape of dimension `dim` (0..=3).
-    pub fn of_dim(dim: usize) -> Shape {
-        [Shape::Point, Shape::Line, Shape::Quad, Shape::Hex][dim.min(3)]
-    }
-
-    /// Nodes of a Lagrange element of order `p` (points have one).
-    pub fn nodes(self, p: usize) -> usize {
-        (p + 1).pow(self.dim() as u32)
-    }
+/// The tensor-product shape of dimension `dim` (0..=3): a generated
+/// mesh's elements.
+fn tensor_of_dim(dim: usize) -> Shape {
+    [Shape::Point, Shape::Line, Shape::Quadrilateral, Shape::Hexahedron][dim.min(3)]
 }
 
 /// One element of a file.
@@ -94,7 +68,8 @@ pub struct Element {
     pub shape: Shape,
     /// Its Lagrange order (1 for points).
     pub order: usize,
-    /// Indices into [`Layout::coords`], tensor order.
+    /// Indices into [`Layout::coords`], in the crate's order (tensor
+    /// order, or the simplex lattice order).
     pub nodes: Vec<usize>,
 }
 
@@ -214,10 +189,10 @@ impl Layout {
         let (p, nb) = (mesh.p, mesh.boundary.len());
         let facets = mesh.boundary.iter().enumerate().filter(|(_, b)| b.part < k);
         let mut elements: Vec<Element> = facets
-            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: Shape::of_dim(D - 1), order: p, nodes: b.nodes.clone() })
+            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: mesh.shape.facet_shape(), order: p, nodes: b.nodes.clone() })
             .collect();
         let cells = mesh.cells.iter().enumerate();
-        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: Shape::of_dim(D), order: p, nodes: n.clone() }));
+        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.shape, order: p, nodes: n.clone() }));
         Layout {
             physical_names,
             entities,
@@ -336,6 +311,7 @@ impl Layout {
             boundary_attributes.push(a);
         }
         let mesh = CurvedMesh {
+            shape: cells.first().map_or(tensor_of_dim(D), |c| c.shape),
             p: cells.first().map_or(1, |c| c.order),
             spacing: crate::mesh::element::Spacing::Equispaced,
             nodes: self.coords.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
@@ -455,8 +431,8 @@ impl Layout {
             if !corner_indices(el.shape, el.order).iter().any(|&c| side.contains(&el.nodes[c])) {
                 continue;
             }
-            let corners = corner_indices(Shape::of_dim(dim), el.order);
-            for sub in sub_elements(el.shape, el.order, dim) {
+            for (sub_shape, sub) in sub_elements(el.shape, el.order, dim) {
+                let corners = corner_indices(sub_shape, el.order);
                 if corners.iter().all(|&c| side.contains(&el.nodes[sub[c]])) {
                     out.extend(sub.iter().map(|&i| el.nodes[i]));
                 }
@@ -507,23 +483,39 @@ fn apply(m: &[f64; 12], x: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|r| m[4 * r] * x[0] + m[4 * r + 1] * x[1] + m[4 * r + 2] * x[2] + m[4 * r + 3])
 }
 
-/// Local (tensor) indices of the corners of a tensor element of order `p`,
-/// in tensor order of the corners.
+/// Local indices of the corners of an element of order `p`: tensor order
+/// of the corners for a tensor element, the vertices in the shape's order
+/// for a simplex.
 fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
     let d = shape.dim();
+    if shape.is_simplex() && d >= 2 {
+        // vertex 0 at the origin, vertex k + 1 at p along axis k
+        let lattice = simplex::lattice(shape, p);
+        let vertex = |v: usize| -> [usize; 3] { std::array::from_fn(|k| if v == k + 1 { p } else { 0 }) };
+        return (0..=d).map(|v| lattice.iter().position(|l| *l == vertex(v)).expect("the vertices are lattice nodes")).collect();
+    }
     (0..1usize << d).map(|bits| (0..d).map(|k| ((bits >> k) & 1) * p * (p + 1).pow(k as u32)).sum()).collect()
 }
 
-/// Every sub-element of dimension `dim` of a tensor element of order `p`
-/// (its edges for 1, faces for 2, itself for its own dimension), as local
-/// indices in the sub-element's own tensor order.
-fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<Vec<usize>> {
+/// Every sub-element of dimension `dim` of an element of order `p` (its
+/// edges for 1, faces for 2, itself for its own dimension), with its
+/// shape, as local indices in the sub-element's own order.
+fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> {
     let d = shape.dim();
     if dim > d {
         return Vec::new();
     }
     if dim == 0 {
-        return corner_indices(shape, p).into_iter().map(|c| vec![c]).collect();
+        return corner_indices(shape, p).into_iter().map(|c| (Shape::Point, vec![c])).collect();
+    }
+    if dim == d {
+        return vec![(shape, (0..shape.num_nodes(p)).collect())];
+    }
+    if shape.is_simplex() {
+        return match dim {
+            1 => (0..shape.edges().len()).map(|e| (Shape::Line, simplex::edge_nodes(shape, p, e))).collect(),
+            _ => (0..shape.faces().len()).map(|f| (Shape::Triangle, simplex::face_nodes(shape, p, f))).collect(),
+        };
     }
     let n1 = p + 1;
     let stride = |k: usize| n1.pow(k as u32);
@@ -537,7 +529,7 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<Vec<usize>> {
             let nodes = (0..n1.pow(dim as u32))
                 .map(|i| base + axes.iter().enumerate().map(|(j, &k)| (i / n1.pow(j as u32) % n1) * stride(k)).sum::<usize>())
                 .collect();
-            out.push(nodes);
+            out.push((tensor_of_dim(dim), nodes));
         }
     }
     out
@@ -563,18 +555,18 @@ impl SubElements {
             }
         };
         for b in &mesh.boundary {
-            let corners = corner_indices(Shape::of_dim(D - 1), mesh.p);
+            let corners = corner_indices(mesh.shape.facet_shape(), mesh.p);
             let mut key: Vec<usize> = corners.iter().map(|&c| b.nodes[c]).collect();
             key.sort_unstable();
             keep(key, &|| b.nodes.clone(), true);
         }
-        let shape = Shape::of_dim(D);
+        let shape = mesh.shape;
         let near: std::collections::HashSet<usize> = wanted.iter().flatten().copied().collect();
         let cell_corners = corner_indices(shape, mesh.p);
         for cell in mesh.cells.iter().filter(|c| cell_corners.iter().any(|&k| near.contains(&c[k]))) {
             for dim in 1..D {
-                let corners = corner_indices(Shape::of_dim(dim), mesh.p);
-                for sub in sub_elements(shape, mesh.p, dim) {
+                for (sub_shape, sub) in sub_elements(shape, mesh.p, dim) {
+                    let corners = corner_indices(sub_shape, mesh.p);
                     let mut key: Vec<usize> = corners.iter().map(|&c| cell[sub[c]]).collect();
                     key.sort_unstable();
                     keep(key, &|| sub.iter().map(|&i| cell[i]).collect(), false);
@@ -591,6 +583,9 @@ impl SubElements {
         let mut key = corners.to_vec();
         key.sort_unstable();
         let nodes = self.by_corners.get(&key)?;
+        if corners.len() == 3 {
+            return Self::oriented_triangle(nodes, corners, self.p);
+        }
         let dim = if corners.len() == 2 { 1 } else { 2 };
         let p = self.p;
         let n1 = p + 1;
@@ -612,7 +607,7 @@ impl SubElements {
         let count = n1.pow(dim as u32);
         let nv = if dim == 1 { 1 } else { n1 };
         let at = |i: usize| (i % n1, i / n1);
-        let ends = corner_indices(Shape::of_dim(dim), p);
+        let ends = corner_indices(tensor_of_dim(dim), p);
         maps.iter().find_map(|f| {
             let image = |i: usize| {
                 let (u, v) = at(i);
@@ -620,6 +615,27 @@ impl SubElements {
                 if nv == 1 { a } else { a + n1 * b }
             };
             let out: Vec<usize> = (0..count).map(|i| nodes[image(i)]).collect();
+            ends.iter().zip(corners).all(|(&c, &want)| out[c] == want).then_some(out)
+        })
+    }
+
+    /// [`SubElements::find`] for a triangle face (lattice order): the one
+    /// of its six symmetries (permutations of the barycentric indices)
+    /// that puts `corners` at its vertices in order.
+    fn oriented_triangle(nodes: &[usize], corners: &[usize], p: usize) -> Option<Vec<usize>> {
+        let lattice = simplex::lattice(Shape::Triangle, p);
+        let position: HashMap<[usize; 2], usize> = lattice.iter().enumerate().map(|(k, l)| ([l[0], l[1]], k)).collect();
+        let ends = corner_indices(Shape::Triangle, p);
+        let perms = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+        perms.iter().find_map(|sigma| {
+            let out: Vec<usize> = lattice
+                .iter()
+                .map(|l| {
+                    let bary = [p - l[0] - l[1], l[0], l[1]];
+                    let b = sigma.map(|k| bary[k]);
+                    nodes[position[&[b[1], b[2]]]]
+                })
+                .collect();
             ends.iter().zip(corners).all(|(&c, &want)| out[c] == want).then_some(out)
         })
     }
@@ -667,8 +683,8 @@ mod tests {
 
     #[test]
     fn sub_elements_of_a_hex_are_its_12_edges_and_6_faces() {
-        let edges = sub_elements(Shape::Hex, 2, 1);
-        let faces = sub_elements(Shape::Hex, 2, 2);
+        let edges: Vec<Vec<usize>> = sub_elements(Shape::Hexahedron, 2, 1).into_iter().map(|s| s.1).collect();
+        let faces: Vec<Vec<usize>> = sub_elements(Shape::Hexahedron, 2, 2).into_iter().map(|s| s.1).collect();
         assert_eq!((edges.len(), faces.len()), (12, 6));
         // the edge along x at y = z = 0 of a p = 2 hex: nodes 0, 1, 2
         assert!(edges.contains(&vec![0, 1, 2]));
@@ -676,7 +692,7 @@ mod tests {
         assert!(edges.contains(&vec![8, 17, 26]));
         // the face z = p: nodes 18..27
         assert!(faces.contains(&(18..27).collect::<Vec<_>>()));
-        assert_eq!(corner_indices(Shape::Quad, 3), vec![0, 3, 12, 15]);
+        assert_eq!(corner_indices(Shape::Quadrilateral, 3), vec![0, 3, 12, 15]);
     }
 
     #[test]

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use super::fmt_f64;
-use crate::mesh::element::{to_format, vtk_hex_order, vtk_quad_order, Spacing};
+use crate::mesh::element::{simplex, to_format, vtk_hex_order, vtk_quad_order, Shape, Spacing};
 use crate::mesh::file::write_atomic;
-use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
+use crate::mesh::{CurvedMesh, HexMesh, PlaneMesh};
 
 /// VTK's cell type number for a linear quadrilateral.
 pub const VTK_QUAD: u8 = 9;
@@ -23,6 +23,14 @@ pub const VTK_LAGRANGE_QUADRILATERAL: u8 = 70;
 
 /// VTK's cell type of a Lagrange hexahedron.
 pub const VTK_LAGRANGE_HEXAHEDRON: u8 = 72;
+/// VTK's linear triangle.
+pub const VTK_TRIANGLE: u8 = 5;
+/// VTK's linear tetrahedron.
+pub const VTK_TETRA: u8 = 10;
+/// VTK's Lagrange triangle of any order.
+pub const VTK_LAGRANGE_TRIANGLE: u8 = 69;
+/// VTK's Lagrange tetrahedron of any order.
+pub const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
 
 /// Errors of writing VTU files.
 #[derive(Debug, Error)]
@@ -64,8 +72,8 @@ pub enum VtuError {
 
 /// The quad mesh as a VTK XML UnstructuredGrid ([`grid_string`] of the
 /// order-1 mesh): cells of type [`VTK_QUAD`], 2-vectors written with z = 0.
-pub fn vtu_string(
-    mesh: &QuadMesh,
+pub fn vtu_string<const N: usize>(
+    mesh: &PlaneMesh<N>,
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 2]])],
 ) -> Result<String, VtuError> {
@@ -73,9 +81,9 @@ pub fn vtu_string(
 }
 
 /// Writes [`vtu_string`] atomically to `path`.
-pub fn write_vtu(
+pub fn write_vtu<const N: usize>(
     path: &Path,
-    mesh: &QuadMesh,
+    mesh: &PlaneMesh<N>,
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 2]])],
 ) -> Result<(), VtuError> {
@@ -247,15 +255,26 @@ fn validate<const D: usize>(
     Ok(())
 }
 
-/// Connectivity in VTK's node order, offsets (end of each cell), types.
-fn push_cells<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>) {
-    let (p, ok) = (mesh.p, "order checked by validate");
-    let (perm, cell_type) = match (D, p) {
-        (2, 1) => (vtk_quad_order(1).expect(ok), VTK_QUAD),
-        (2, _) => (vtk_quad_order(p).expect(ok), VTK_LAGRANGE_QUADRILATERAL),
+/// VTK's node order (from the crate's) and cell type of a `shape`
+/// element of order `p`: VTK's linear cells at order 1, its Lagrange
+/// cells above. The table of this format.
+fn vtk_type(shape: Shape, p: usize) -> (Vec<usize>, u8) {
+    let ok = "order checked by validate";
+    match (shape, p) {
+        (Shape::Triangle, 1) => (vec![0, 1, 2], VTK_TRIANGLE),
+        (Shape::Triangle, _) => (simplex::vtk_triangle_order(p).expect(ok), VTK_LAGRANGE_TRIANGLE),
+        (Shape::Tetrahedron, 1) => (vec![0, 1, 2, 3], VTK_TETRA),
+        (Shape::Tetrahedron, _) => (simplex::vtk_tet_order(p).expect(ok), VTK_LAGRANGE_TETRAHEDRON),
+        (Shape::Quadrilateral, 1) => (vtk_quad_order(1).expect(ok), VTK_QUAD),
+        (Shape::Quadrilateral, _) => (vtk_quad_order(p).expect(ok), VTK_LAGRANGE_QUADRILATERAL),
         (_, 1) => (vtk_hex_order(1).expect(ok), VTK_HEXAHEDRON),
         _ => (vtk_hex_order(p).expect(ok), VTK_LAGRANGE_HEXAHEDRON),
-    };
+    }
+}
+
+/// Connectivity in VTK's node order, offsets (end of each cell), types.
+fn push_cells<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>) {
+    let (perm, cell_type) = vtk_type(mesh.shape, mesh.p);
     out.push_str("<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
     for cell in &mesh.cells {
         for (i, v) in to_format(&perm, cell).iter().enumerate() {

@@ -6,7 +6,8 @@
 
 use super::element::basis::{tensor_map, Basis1d};
 use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
-use super::{HexMesh, QuadMesh};
+use super::element::{simplex, Shape};
+use super::{HexMesh, PlaneMesh};
 
 /// One boundary element: an order-`p` line (2D meshes) or quad (3D
 /// meshes) with its nodes in tensor order, and its part.
@@ -22,13 +23,19 @@ pub struct CurvedBoundary {
 /// A mesh of order-`p` Lagrange quads (`D = 2`) or hexes (`D = 3`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurvedMesh<const D: usize> {
+    /// The cells' reference shape: quadrilateral or triangle (`D = 2`),
+    /// hexahedron or tetrahedron (`D = 3`). Boundary elements have its
+    /// facet shape.
+    pub shape: Shape,
     /// Element order, `1..=4`.
     pub p: usize,
     /// Where the element nodes sit in the reference cell.
     pub spacing: Spacing,
     /// Node coordinates.
     pub nodes: Vec<[f64; D]>,
-    /// Cells, `(p+1)^D` node indices each, in tensor order.
+    /// Cells, [`Shape::num_nodes`] node indices each, in tensor order
+    /// (quads, hexes) or the simplex lattice order
+    /// ([`super::element::simplex`]).
     pub cells: Vec<Vec<usize>>,
     /// Boundary elements (dimension `D − 1`) with their parts.
     pub boundary: Vec<CurvedBoundary>,
@@ -128,6 +135,7 @@ impl<const D: usize> CurvedMesh<D> {
         }
         let names = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
         Ok(CurvedMesh {
+            shape: if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron },
             p,
             spacing,
             nodes,
@@ -137,9 +145,14 @@ impl<const D: usize> CurvedMesh<D> {
         })
     }
 
-    /// Number of nodes of a cell, `(p+1)^D`.
+    /// Number of nodes of a cell: `(p+1)^D` for quads and hexes.
     pub fn nodes_per_cell(&self) -> usize {
-        (self.p + 1).pow(D as u32)
+        self.shape.num_nodes(self.p)
+    }
+
+    /// Whether the cells are triangles or tetrahedra.
+    pub fn is_simplex(&self) -> bool {
+        self.shape.is_simplex()
     }
 
     /// The coordinates of cell `c`'s nodes in tensor order.
@@ -157,6 +170,9 @@ impl<const D: usize> CurvedMesh<D> {
         }
         if !(2..=3).contains(&D) {
             return Err(format!("{D}D meshes are not supported"));
+        }
+        if self.shape.dim() != D || !matches!(self.shape, Shape::Triangle | Shape::Quadrilateral | Shape::Tetrahedron | Shape::Hexahedron) {
+            return Err(format!("cells of shape {:?} in a {D}D mesh", self.shape));
         }
         let n = self.nodes.len();
         if let Some(i) = self
@@ -181,7 +197,7 @@ impl<const D: usize> CurvedMesh<D> {
                 return Err(format!("cell {c} refers to a node >= {n}"));
             }
         }
-        let per_face = (self.p + 1).pow(D as u32 - 1);
+        let per_face = self.shape.facet_shape().num_nodes(self.p);
         let word = if D == 2 { "boundary edge" } else { "boundary face" };
         for (e, b) in self.boundary.iter().enumerate() {
             if b.nodes.len() != per_face || b.nodes.iter().any(|&v| v >= n) {
@@ -221,10 +237,26 @@ impl<const D: usize> CurvedMesh<D> {
         if self.spacing == Spacing::Equispaced {
             return out;
         }
+        let mut done = vec![false; self.nodes.len()];
+        if self.is_simplex() {
+            let space = simplex::space(self.shape, self.p, self.spacing).expect("order checked by validate");
+            let equi = simplex::space(self.shape, self.p, Spacing::Equispaced).expect("order checked by validate");
+            let (mut values, mut grads) = (vec![0.0; space.nodes.len()], vec![[0.0; 3]; space.nodes.len()]);
+            for cell in &self.cells {
+                for (a, &v) in cell.iter().enumerate() {
+                    if std::mem::replace(&mut done[v], true) {
+                        continue;
+                    }
+                    space.eval(equi.nodes[a], &mut values, &mut grads);
+                    out.nodes[v] = std::array::from_fn(|k| cell.iter().zip(&values).map(|(&w, &b)| b * self.nodes[w][k]).sum());
+                }
+            }
+            out.spacing = Spacing::Equispaced;
+            return out;
+        }
         let basis = Basis1d::new(self.p, self.spacing).expect("order checked by validate");
         let t = nodes_1d(self.p, Spacing::Equispaced).expect("order checked by validate");
         let n = self.p + 1;
-        let mut done = vec![false; self.nodes.len()];
         for cell in &self.cells {
             let ctrl: Vec<[f64; D]> = cell.iter().map(|&v| self.nodes[v]).collect();
             for (a, &v) in cell.iter().enumerate() {
@@ -247,13 +279,15 @@ impl<const D: usize> CurvedMesh<D> {
 
 
 impl CurvedMesh<2> {
-    /// The linear quad mesh as the order-1 case (cells and edges keep
-    /// their nodes, in tensor order), for code written for any order.
-    pub fn from_quads(m: &QuadMesh) -> Self {
-        let perm = gmsh_quad_order(1).expect("order 1");
+    /// The linear quad or triangle mesh as the order-1 case (cells and
+    /// edges keep their nodes, quads in tensor order; a triangle's three
+    /// corners are already its lattice order), for code written for any
+    /// order.
+    pub fn from_quads<const N: usize>(m: &PlaneMesh<N>) -> Self {
+        let (shape, perm) = if N == 3 { (Shape::Triangle, vec![0, 1, 2]) } else { (Shape::Quadrilateral, gmsh_quad_order(1).expect("order 1")) };
         let cells = m.cells.iter().map(|c| from_format(&perm, c)).collect();
         let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
-        CurvedMesh { p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
 
@@ -263,7 +297,7 @@ impl CurvedMesh<3> {
         let (cell, face) = (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1"));
         let cells = m.cells.iter().map(|c| from_format(&cell, c)).collect();
         let boundary = m.faces.iter().map(|f| CurvedBoundary { nodes: from_format(&face, &f.nodes), part: f.part }).collect();
-        CurvedMesh { p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+        CurvedMesh { shape: Shape::Hexahedron, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
 

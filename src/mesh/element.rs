@@ -19,8 +19,10 @@
 pub mod basis;
 pub mod order;
 pub mod shape;
+pub mod simplex;
 
-pub use shape::Shape;
+pub use shape::{Face, Shape};
+pub use simplex::{simplex_nodes, space, SimplexSpace};
 
 pub use basis::{hex_map, lagrange_1d, quad_map, Basis1d};
 pub use order::{

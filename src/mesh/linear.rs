@@ -1,9 +1,9 @@
-//! Quadrilateral meshes: nodes, cells, named boundary edges, and the
-//! structured box generator.
+//! Plane meshes of quadrilaterals or triangles (nodes, cells, named
+//! boundary edges, the structured box generator), and hexahedral meshes.
 //!
 //! Cells are stored counter-clockwise (positive orientation), so the
-//! bilinear map from the reference square has a positive Jacobian on a
-//! valid cell. Boundary edges are oriented with the domain on their left.
+//! linear map from the reference cell has a positive Jacobian on a valid
+//! cell. Boundary edges are oriented with the domain on their left.
 
 use std::ops::Range;
 
@@ -19,18 +19,26 @@ pub struct BoundaryEdge {
     pub part: usize,
 }
 
-/// A linear (Q1) quadrilateral mesh with named boundary parts.
+/// A linear plane mesh with named boundary parts: bilinear quadrilaterals
+/// (`N = 4`, [`QuadMesh`]) or linear triangles (`N = 3`, [`TriMesh`]). The
+/// kind is the cell's node count, so every loop over cells is compiled
+/// once per kind.
 #[derive(Clone, Debug, PartialEq)]
-pub struct QuadMesh {
+pub struct PlaneMesh<const N: usize = 4> {
     /// Node coordinates.
     pub nodes: Vec<Point2>,
-    /// Cells as four node indices, counter-clockwise.
-    pub cells: Vec<[usize; 4]>,
+    /// Cells as `N` node indices, counter-clockwise.
+    pub cells: Vec<[usize; N]>,
     /// Boundary edges with their part.
     pub edges: Vec<BoundaryEdge>,
     /// Names of the boundary parts (physical groups of dimension 1).
     pub part_names: Vec<String>,
 }
+
+/// A mesh of bilinear quadrilaterals.
+pub type QuadMesh = PlaneMesh<4>;
+/// A mesh of linear triangles.
+pub type TriMesh = PlaneMesh<3>;
 
 /// The four sides of a structured box, in the order used for part indices
 /// of a freshly generated box.
@@ -77,6 +85,9 @@ impl QuadMesh {
         }
     }
 
+}
+
+impl<const N: usize> PlaneMesh<N> {
     /// Number of nodes.
     pub fn num_nodes(&self) -> usize {
         self.nodes.len()
@@ -87,14 +98,15 @@ impl QuadMesh {
         self.cells.len()
     }
 
-    /// Coordinates of the four corners of cell `c`.
-    pub fn cell_coords(&self, c: usize) -> [Point2; 4] {
+    /// Coordinates of the corners of cell `c`.
+    pub fn cell_coords(&self, c: usize) -> [Point2; N] {
         self.cells[c].map(|n| self.nodes[n])
     }
 
-    /// Area of cell `c`.
+    /// Area of cell `c` (exact for a bilinear quad or a triangle: the
+    /// shoelace formula).
     pub fn cell_area(&self, c: usize) -> f64 {
-        quad_area(&self.cell_coords(c))
+        polygon_area(&self.cell_coords(c))
     }
 
     /// Total area.
@@ -135,7 +147,8 @@ impl QuadMesh {
         let mut turned = 0;
         for (cell, f) in self.cells.iter_mut().zip(flip) {
             if f {
-                *cell = [cell[0], cell[3], cell[2], cell[1]];
+                // the same corners the other way round, from the same first
+                cell[1..].reverse();
                 turned += 1;
             }
         }
@@ -149,8 +162,8 @@ impl QuadMesh {
         // undirected edge → (cell, runs from the smaller node)
         let mut by_edge: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
         for (c, cell) in self.cells.iter().enumerate() {
-            for k in 0..4 {
-                let (a, b) = (cell[k], cell[(k + 1) % 4]);
+            for k in 0..N {
+                let (a, b) = (cell[k], cell[(k + 1) % N]);
                 by_edge.entry((a.min(b), a.max(b))).or_default().push((c, a < b));
             }
         }
@@ -169,8 +182,8 @@ impl QuadMesh {
                 next += 1;
                 let fc = flip[c] == Some(true);
                 let cell = self.cells[c];
-                for k in 0..4 {
-                    let (a, b) = (cell[k], cell[(k + 1) % 4]);
+                for k in 0..N {
+                    let (a, b) = (cell[k], cell[(k + 1) % N]);
                     for &(d, fwd) in &by_edge[&(a.min(b), a.max(b))] {
                         if d == c {
                             continue;
@@ -259,6 +272,19 @@ mod tests {
 /// Area of a bilinear quad (exact: the shoelace formula on its diagonals).
 pub fn quad_area(p: &[Point2; 4]) -> f64 {
     0.5 * ((p[2][0] - p[0][0]) * (p[3][1] - p[1][1]) - (p[3][0] - p[1][0]) * (p[2][1] - p[0][1]))
+}
+
+/// Signed area of a cell with straight edges: a triangle, or a bilinear
+/// quad (whose area is that of its corner polygon).
+pub fn polygon_area<const N: usize>(p: &[Point2; N]) -> f64 {
+    if N == 4 {
+        // the diagonal form, bit for bit what quads always gave
+        return quad_area(&std::array::from_fn(|k| p[k]));
+    }
+    0.5 * (0..N).map(|k| {
+        let (a, b) = (p[k], p[(k + 1) % N]);
+        a[0] * b[1] - b[0] * a[1]
+    }).sum::<f64>()
 }
 
 /// Greedy colouring of blocks of `block` consecutive cells so that no two

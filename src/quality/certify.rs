@@ -30,7 +30,7 @@ use crate::mesh::element::{check_nodes, nodes_1d, Basis1d, HighOrderError, Spaci
 use crate::numeric::bezier::{bernstein, binom, invert, Bezier};
 
 /// Unit roundoff: `fl(a ∘ b) = (a ∘ b)(1 + δ)` with `|δ| ≤ U`.
-const U: f64 = f64::EPSILON / 2.0;
+pub(crate) const U: f64 = f64::EPSILON / 2.0;
 
 /// How many times [`Certifier::is_valid`] halves a box in each direction
 /// before it gives up and calls the element (nearly) invalid: 4 levels
@@ -41,7 +41,7 @@ pub const MAX_SUBDIVISION_DEPTH: usize = 4;
 /// `γ_k = k U / (1 − k U)`: a product of `k` factors `(1 + δ_i)^{±1}`,
 /// `|δ_i| ≤ U`, lies within `γ_k` of 1 (Higham, *Accuracy and Stability
 /// of Numerical Algorithms*, Lemma 3.1).
-fn gamma(k: usize) -> f64 {
+pub(crate) fn gamma(k: usize) -> f64 {
     let ku = k as f64 * U;
     ku / (1.0 - ku)
 }
@@ -97,7 +97,7 @@ impl Conversion {
 /// the certificate does not depend on where the element is or how large
 /// it is (up to the rounding of the centring subtraction, one relative `U`
 /// per coordinate, which [`DetParts::error_bound`] counts).
-fn normalise<const D: usize>(ctrl: &[[f64; D]]) -> ([f64; D], f64) {
+pub(crate) fn normalise<const D: usize>(ctrl: &[[f64; D]]) -> ([f64; D], f64) {
     let centre: [f64; D] = std::array::from_fn(|r| {
         let (lo, hi) = ctrl.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c[r]), hi.max(c[r])));
         0.5 * lo + 0.5 * hi
@@ -333,7 +333,7 @@ pub struct Certificate {
 
 /// What the branch and bound of [`bound_min`] is after.
 #[derive(Clone, Copy)]
-enum Goal {
+pub(crate) enum Goal {
     /// The minimum within `rel_tol`, in at most `max_splits` splits.
     Bracket { rel_tol: f64, max_splits: usize },
     /// Only whether it is certainly positive, in at most
@@ -541,7 +541,35 @@ fn tensor<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> [[f64; D];
 /// Whether `det J > 0` on the whole bilinear quad or trilinear hex with
 /// `corners` in mesh order: [`Certifier::is_valid`] at `p = 1`.
 pub fn linear_is_valid<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> bool {
+    if crate::lsfem::is_simplex(D, N) {
+        let (det, err) = simplex_det(corners);
+        return det > err;
+    }
     linear().is_valid(&tensor(corners))
+}
+
+/// `det J` of a linear triangle or tetrahedron (constant: the determinant
+/// of its edge vectors from node 0) and a bound on its rounding error.
+///
+/// Why the bound holds: each edge component `x_a − x_0` is one rounding
+/// (relative ε); the 2×2 determinant is two products and a difference, the
+/// 3×3 expansion three 2×2 minors times a component and two sums. With
+/// every operand off by at most its own relative ε, the computed value is
+/// within `(D + 3) ε Σ|terms|` of the exact one, `Σ|terms|` being the sum of
+/// the absolute products (Higham's γ_n for an n-term sum of products of
+/// D rounded factors, n ≤ 6, taken generously).
+pub fn simplex_det<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> (f64, f64) {
+    let e: [[f64; D]; D] = std::array::from_fn(|a| std::array::from_fn(|k| corners[a + 1][k] - corners[0][k]));
+    let eps = f64::EPSILON;
+    if D == 2 {
+        let (t1, t2) = (e[0][0] * e[1][1], e[0][1] * e[1][0]);
+        return (t1 - t2, 5.0 * eps * (t1.abs() + t2.abs()));
+    }
+    // rows are the edges: det = e0 · (e1 × e2)
+    let minor = |r: usize, s: usize| e[1][r] * e[2][s] - e[1][s] * e[2][r];
+    let terms = [e[0][0] * minor(1, 2), e[0][1] * minor(2, 0), e[0][2] * minor(0, 1)];
+    let size: f64 = [(0, 1, 2), (1, 2, 0), (2, 0, 1)].iter().map(|&(a, b, c)| (e[0][a] * e[1][b] * e[2][c]).abs() + (e[0][a] * e[1][c] * e[2][b]).abs()).sum();
+    (terms.iter().sum(), 6.0 * eps * size)
 }
 
 /// `(min, max)` of the Bernstein coefficients of `det J` of a linear cell
@@ -549,6 +577,10 @@ pub fn linear_is_valid<const D: usize, const N: usize>(corners: &[[f64; D]; N]) 
 /// cell, each attained when it sits at a corner. A min ≤ 0 does not prove
 /// the cell invalid (see [`linear_is_valid`] for the refined test).
 pub fn det_j_bounds<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> (f64, f64) {
+    if crate::lsfem::is_simplex(D, N) {
+        let det = simplex_det(corners).0;
+        return (det, det);
+    }
     let (parts, _, s) = linear().det_j(&tensor(corners));
     let (lo, hi) = parts.det.coef_bounds();
     let unit = |x: f64| (0..D).fold(x, |v, _| v * s);
@@ -565,6 +597,43 @@ pub fn det_j_bounds<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> 
 pub fn invalid_cells<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[f64; D]]) -> Vec<usize> {
     // once per step attempt over every cell: in parallel
     (0..cells.len()).into_par_iter().with_min_len(256).filter(|&c| !linear_is_valid(&cells[c].map(|n| nodes[n]))).collect()
+}
+
+/// The certifier of one kind and order of element, whatever the kind:
+/// the one API the method and the readers use (tensor Bernstein bounds on
+/// quads and hexes, simplex ones on triangles and tetrahedra).
+pub enum ElementCertifier {
+    /// Quads and hexes.
+    Tensor(Certifier),
+    /// Triangles and tetrahedra.
+    Simplex(super::simplex::SimplexCertifier),
+}
+
+impl ElementCertifier {
+    /// For order-`p` elements of `shape` with nodes at `spacing`.
+    pub fn new(shape: crate::mesh::element::Shape, p: usize, spacing: Spacing) -> Result<Self, HighOrderError> {
+        if shape.is_simplex() {
+            let space = crate::mesh::element::simplex::space(shape, p, spacing)?;
+            return Ok(ElementCertifier::Simplex(super::simplex::SimplexCertifier::new(shape, p, &space.nodes)?));
+        }
+        Ok(ElementCertifier::Tensor(Certifier::new(p, spacing)?))
+    }
+
+    /// See [`Certifier::is_valid`].
+    pub fn is_valid<const D: usize>(&self, ctrl: &[[f64; D]]) -> bool {
+        match self {
+            ElementCertifier::Tensor(c) => c.is_valid(ctrl),
+            ElementCertifier::Simplex(c) => c.is_valid(ctrl),
+        }
+    }
+
+    /// See [`Certifier::certify`].
+    pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
+        match self {
+            ElementCertifier::Tensor(c) => c.certify(ctrl, opts),
+            ElementCertifier::Simplex(c) => c.certify(ctrl, opts),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -314,7 +314,10 @@ fn validate<const D: usize>(mesh: &CurvedMesh<D>, values: &[f64]) -> Result<(), 
     {
         return Err(RenderError::NonFiniteNode { index });
     }
-    let per_cell = (mesh.p + 1).pow(D as u32);
+    if mesh.shape.dim() != D {
+        return Err(RenderError::InvalidCurvedMesh { reason: format!("cells of shape {:?} in a {D}D mesh", mesh.shape) });
+    }
+    let per_cell = mesh.nodes_per_cell();
     check_elements(
         mesh.cells.iter().map(Vec::as_slice),
         per_cell,

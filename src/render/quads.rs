@@ -139,9 +139,10 @@ pub(super) struct QuadCurves {
     edge_nodes: Vec<usize>,
     /// Whether each edge is drawn as boundary: used by one cell, or tagged.
     boundary: Vec<bool>,
-    /// Each cell's four edges, counter-clockwise around the reference
-    /// square, with whether the edge is traversed against its samples.
-    cell_edges: Vec<[(usize, bool); 4]>,
+    /// Each cell's edges (four of a quad, three of a triangle),
+    /// counter-clockwise around the reference cell, with whether the edge
+    /// is traversed against its samples.
+    cell_edges: Vec<smallvec::SmallVec<[(usize, bool); 4]>>,
     /// Curves through each cell's internal nodes: `ξ = t_i` and `η = t_j`
     /// for `0 < i, j < p` (none for `p = 1`), `stride` points each.
     pub(super) grid: Vec<[f64; 2]>,
@@ -154,7 +155,7 @@ impl QuadCurves {
         let q = p + 1;
         let n = pieces(p, SAMPLES_PER_ORDER);
         let table = basis_table(p, mesh.spacing, n);
-        let local = quad_edges(p);
+        let local = cell_edges(mesh, p);
         let mut curves = QuadCurves {
             stride: n + 1,
             points: Vec::new(),
@@ -192,15 +193,20 @@ impl QuadCurves {
         };
         let mut ids = [0; MAX_ORDER + 1];
         for cell in &mesh.cells {
-            let edges = local.each_ref().map(|l| {
+            let mut edges = smallvec::SmallVec::new();
+            for l in &local {
                 for (id, &a) in ids.iter_mut().zip(l) {
                     *id = cell[a];
                 }
                 let (e, rev) = intern(&mut curves, &mut uses, &ids[..q]);
                 uses[e] += 1;
-                (e, rev)
-            });
+                edges.push((e, rev));
+            }
             curves.cell_edges.push(edges);
+            if mesh.is_simplex() {
+                // a triangle's node lines are not iso-lines of one axis
+                continue;
+            }
             // The line ξ = t_i passes through node column i exactly, so it
             // is the 1-D interpolant of that column (likewise for rows).
             for i in 1..p {
@@ -242,11 +248,16 @@ impl QuadCurves {
     }
 }
 
-/// Local tensor indices of the four edges of an order-`p` quad, counter-
-/// clockwise around the reference square: η = 0, ξ = 1, η = 1, ξ = 0.
-fn quad_edges(p: usize) -> [Vec<usize>; 4] {
+/// Local indices of the edges of an order-`p` element, counter-clockwise
+/// around the reference cell: a quad's η = 0, ξ = 1, η = 1, ξ = 0 (tensor
+/// order), a triangle's three edges of the element table (lattice order;
+/// their nodes sit at the 1-D node set, so each is the 1-D interpolant).
+fn cell_edges(mesh: &CurvedMesh<2>, p: usize) -> Vec<Vec<usize>> {
+    if mesh.is_simplex() {
+        return (0..3).map(|e| crate::mesh::element::simplex::edge_nodes(mesh.shape, p, e)).collect();
+    }
     let q = p + 1;
-    [
+    vec![
         (0..q).collect(),
         (0..q).map(|j| p + q * j).collect(),
         (0..q).rev().map(|i| i + q * p).collect(),

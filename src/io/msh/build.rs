@@ -11,10 +11,11 @@
 use std::collections::{HashMap, HashSet};
 
 use super::read::{Accept, Block, Raw};
+use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
-use crate::mesh::element::{from_format, gmsh_hex_order, gmsh_line_order, gmsh_quad_order, Spacing};
-use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName, Shape};
-use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, HexMesh, QuadMesh};
+use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
+use crate::mesh::element::{from_format, Shape, Spacing};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, HexMesh, PlaneMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -36,11 +37,11 @@ impl Raw {
             }
         }
         let elements = self.blocks.iter().flat_map(|b| {
-            let perm = tensor_perm(b.kind.dim, b.kind.order);
+            let perm = gmsh_perm(b.kind.shape, b.kind.order);
             b.tags.iter().zip(b.nodes.chunks(b.kind.nodes)).map(move |(&tag, nodes)| layout::Element {
                 tag,
                 entity: b.entity,
-                shape: Shape::of_dim(b.kind.dim),
+                shape: b.kind.shape,
                 order: b.kind.order,
                 nodes: from_format(&perm, nodes),
             })
@@ -66,24 +67,57 @@ impl Raw {
         }
     }
 
-    /// The linear quad mesh (z must be 0) and its cells' element tags.
-    pub fn quad_mesh(&self) -> Result<(QuadMesh, Vec<u64>), MshError> {
+    /// The linear plane mesh of quads (`N = 4`) or triangles (`N = 3`;
+    /// z must be 0) and its cells' element tags.
+    pub fn plane_mesh<const N: usize>(&self) -> Result<(PlaneMesh<N>, Vec<u64>), MshError> {
         self.check(LINEAR[0])?;
         self.in_plane()?;
+        self.one_shape(2, if N == 3 { Shape::Triangle } else { Shape::Quadrilateral })?;
         let cells = self.by_tag(2);
         let (part_names, edges) = self.boundary(1);
-        let mesh = QuadMesh {
+        let mesh = PlaneMesh {
             nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
-            cells: cells.iter().map(|c| c.2.try_into().expect("4-node quads")).collect(),
+            cells: cells.iter().map(|c| c.2.try_into().expect("one shape of N nodes")).collect(),
             edges: edges.iter().map(|&(nodes, part, _)| BoundaryEdge { nodes: nodes.try_into().expect("2-node lines"), part }).collect(),
             part_names,
         };
         Ok((mesh, cells.iter().map(|c| c.0).collect()))
     }
 
+    /// The refusal of the first cell block (dimension `dim`): its element
+    /// type is not one `accepted` names.
+    pub fn refused(&self, dim: usize, accepted: &'static str) -> MshError {
+        let b = self.blocks.iter().find(|b| b.kind.dim == dim).expect("a cell block of that dimension");
+        MshError::UnknownElementType { at: b.at, accepted, element_type: b.element_type }
+    }
+
+    /// The shape of the cells (dimension `dim`): the first cell block's.
+    pub fn cell_shape(&self, dim: usize) -> Option<Shape> {
+        self.blocks.iter().find(|b| b.kind.dim == dim).map(|b| b.kind.shape)
+    }
+
+    /// Fails unless every cell (dimension `dim`) is a `cells` and every
+    /// boundary element one of its facets' shape.
+    fn one_shape(&self, dim: usize, cells: Shape) -> Result<(), MshError> {
+        let facet = cells.facet_shape();
+        for b in self.blocks.iter().filter(|b| b.kind.dim + 1 >= dim && b.kind.dim <= dim) {
+            let (what, expected) = if b.kind.dim == dim { ("cells", cells) } else { ("boundary elements", facet) };
+            if b.kind.shape != expected {
+                let why = if b.kind.dim == dim {
+                    "meshes of one kind of cell are curved for now (mixed meshes are next); mesh all of the domain with one kind"
+                } else {
+                    "the boundary elements must be faces of the cells"
+                };
+                return Err(MshError::MixedShapes { at: b.at, what, expected, found: b.kind.shape, why });
+            }
+        }
+        Ok(())
+    }
+
     /// The linear hex mesh and its cells' element tags.
     pub fn hex_mesh(&self) -> Result<(HexMesh, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
+        self.one_shape(3, Shape::Hexahedron)?;
         let cells = self.by_tag(3);
         let (part_names, faces) = self.boundary(2);
         let mesh = HexMesh {
@@ -108,17 +142,16 @@ impl Raw {
             return Err(syntax(at, &format!("at least one {D}D cell"), "none"));
         };
         let p = first.kind.order;
-        let ok = "orders 1..=4 from the type table";
-        let (cell_perm, face_perm) = match D {
-            2 => (gmsh_quad_order(p).expect(ok), gmsh_line_order(p).expect(ok)),
-            _ => (gmsh_hex_order(p).expect(ok), gmsh_quad_order(p).expect(ok)),
-        };
+        let shape = first.kind.shape;
+        self.one_shape(D, shape)?;
+        let (cell_perm, face_perm) = (gmsh_perm(shape, p), gmsh_perm(shape.facet_shape(), p));
         let (part_names, faces) = self.boundary(D - 1);
         let blocks = cells.iter().map(|c| c.1).chain(faces.iter().map(|f| f.2));
         if let Some(b) = blocks.into_iter().find(|b| b.kind.order != p) {
             return Err(syntax(b.at, &format!("an element of order {p}, as the first cell"), &format!("order {}", b.kind.order)));
         }
         let mesh = CurvedMesh {
+            shape,
             p,
             spacing: Spacing::Equispaced,
             nodes: self.nodes.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
@@ -198,17 +231,5 @@ impl Raw {
             entity_parts.insert(entity, parts);
         }
         (names, entity_parts)
-    }
-}
-
-/// Gmsh's local order of a tensor element of dimension `dim` and order
-/// `p` (identity for a point).
-pub(super) fn tensor_perm(dim: usize, p: usize) -> Vec<usize> {
-    let ok = "orders 1..=4 from the type table";
-    match dim {
-        0 => vec![0],
-        1 => gmsh_line_order(p).expect(ok),
-        2 => gmsh_quad_order(p).expect(ok),
-        _ => gmsh_hex_order(p).expect(ok),
     }
 }

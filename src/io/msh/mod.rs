@@ -18,6 +18,7 @@
 mod build;
 mod read;
 mod v22;
+mod types;
 mod write;
 
 use std::fmt;
@@ -28,22 +29,28 @@ use thiserror::Error;
 pub use v22::layout_text_22;
 pub use write::{hex_msh_string, layout_text, msh_string, msh_type, write_hex_msh, write_msh};
 
-use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
+use crate::mesh::element::Shape;
+use crate::mesh::{CurvedMesh, HexMesh, QuadMesh, TriMesh};
 use read::Accept;
 
 pub use crate::io::layout::DOMAIN_NAME;
 
+pub use types::MSH_TYPES;
 /// MSH element types of lines of order 1..=4 (index `p − 1`).
-pub const MSH_LINE_TYPES: [i64; 4] = [1, 8, 26, 27];
+pub const MSH_LINE_TYPES: [i64; 4] = MSH_TYPES[0].1;
 /// MSH element types of quads of order 1..=4: QUA_4, QUA_9, QUA_16, QUA_25.
-pub const MSH_QUAD_TYPES: [i64; 4] = [3, 10, 36, 37];
+pub const MSH_QUAD_TYPES: [i64; 4] = MSH_TYPES[2].1;
 /// MSH element types of hexes of order 1..=4: HEX_8, HEX_27, HEX_64, HEX_125.
-pub const MSH_HEX_TYPES: [i64; 4] = [5, 12, 92, 93];
+pub const MSH_HEX_TYPES: [i64; 4] = MSH_TYPES[4].1;
 
 /// What the linear readers take: quad meshes, then hex meshes.
 const LINEAR: [Accept; 2] = [
-    Accept { max_dim: 2, max_order: 1, phrase: "only linear meshes: 1 = 2-node line, 3 = 4-node quad, 15 = point" },
-    Accept { max_dim: 3, max_order: 1, phrase: "only linear meshes: 1 = 2-node line, 3 = 4-node quad, 5 = 8-node hexahedron, 15 = point" },
+    Accept { max_dim: 2, max_order: 1, phrase: "only linear meshes: 1 = 2-node line, 2 = 3-node triangle, 3 = 4-node quad, 15 = point" },
+    Accept {
+        max_dim: 3,
+        max_order: 1,
+        phrase: "only linear meshes: 1 = 2-node line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 15 = point",
+    },
 ];
 
 /// What the readers of any order take, in 2D and in 3D.
@@ -51,8 +58,8 @@ const CURVED: [Accept; 2] = [
     Accept { max_dim: 2, max_order: 4, phrase: ACCEPTED },
     Accept { max_dim: 3, max_order: 4, phrase: ACCEPTED },
 ];
-const ACCEPTED: &str = "Lagrange quads 3/10/36/37 with lines 1/8/26/27 (2D), \
-                        hexes 5/12/92/93 with quads 3/10/36/37 (3D), points 15";
+const ACCEPTED: &str = "Lagrange triangles 2/9/21/23 or quads 3/10/36/37 with lines 1/8/26/27 (2D), \
+                        tetrahedra 4/11/29/30 or hexes 5/12/92/93 with triangles or quads (3D), points 15";
 
 /// How to turn another MSH flavour into one this reader accepts.
 const RESAVE_HINT: &str = "re-save it as ASCII MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
@@ -199,6 +206,22 @@ pub enum MshError {
         /// Its z.
         z: f64,
     },
+    /// Cells of two kinds in one mesh (quads with triangles, hexes with
+    /// tetrahedra), or boundary elements of another kind than the cells'
+    /// facets: the method takes one kind of cell per mesh for now.
+    #[error("{at}: element block of {found:?}s in a mesh whose {what} are {expected:?}s: {why}")]
+    MixedShapes {
+        /// Where the block header is.
+        at: Pos,
+        /// "cells" or "boundary elements".
+        what: &'static str,
+        /// The shape the first cell block set.
+        expected: crate::mesh::element::Shape,
+        /// The shape of this block.
+        found: crate::mesh::element::Shape,
+        /// What to do.
+        why: &'static str,
+    },
     /// A required section is absent.
     #[error("missing section ${0}")]
     MissingSection(&'static str),
@@ -226,9 +249,8 @@ fn shown(token: &str, quote: &str) -> String {
 }
 
 /// What to do instead of an element type the reader refuses: for
-/// triangles, tetrahedra, prisms and pyramids (Gmsh makes them by default,
-/// so this is the usual first failure), and for elements of order > 1
-/// (`curve` places the high-order nodes itself).
+/// tetrahedra, prisms and pyramids (not curved yet), and for elements of
+/// order > 1 (`curve` places the high-order nodes itself).
 fn recombine_hint(element_type: i64) -> String {
     let high_order = match element_type {
         8 | 26 | 27 => Some(("line", [8, 26, 27].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
@@ -246,12 +268,9 @@ fn recombine_hint(element_type: i64) -> String {
         );
     }
     match element_type {
-        2 | 9 | 20..=25 | 4 | 11 | 29..=33 | 6 | 13 | 18 | 7 | 14 | 19 => {
-            ". Triangles, tetrahedra, prisms and pyramids are not supported yet: deformesh takes quad and hex meshes. \
-             In Gmsh, recombine: for all quads put `Mesh.RecombineAll = 1;` and `Mesh.SubdivisionAlgorithm = 1;` in the .geo file \
-             (or pass `-setnumber Mesh.RecombineAll 1 -setnumber Mesh.SubdivisionAlgorithm 1`), \
-             for all hexes `Mesh.SubdivisionAlgorithm = 2;` (or extrude a quad mesh with `Recombine`); see the README"
-                .into()
+        20 | 22 | 24 | 25 => ". Serendipity and incomplete triangles are not read: give `curve` the linear mesh (type 2)".into(),
+        4 | 11 | 29..=33 | 6 | 13 | 18 | 7 | 14 | 19 => {
+            ". Tetrahedra, prisms and pyramids are not curved yet: deformesh curves triangle and quad meshes in 2D and hex meshes in 3D".into()
         }
         _ => String::new(),
     }
@@ -286,7 +305,7 @@ pub fn parse_msh(bytes: impl AsRef<[u8]>) -> Result<QuadMesh, MshError> {
 /// [`parse_msh`], with the element tag of every cell in the file (cell
 /// `c` is element `tags[c]`): messages name elements as the file does.
 pub fn parse_msh_tagged(bytes: impl AsRef<[u8]>) -> Result<(QuadMesh, Vec<u64>), MshError> {
-    read::parse(bytes.as_ref(), LINEAR[0])?.quad_mesh()
+    read::parse(bytes.as_ref(), LINEAR[0])?.plane_mesh()
 }
 
 /// Reads an MSH 4.1 hex mesh file, ASCII or binary (see [`parse_hex_msh`]).
@@ -332,11 +351,13 @@ impl<const D: usize> CurvedMesh<D> {
 pub enum AnyMesh {
     /// Linear quads.
     Quads(QuadMesh),
+    /// Linear triangles.
+    Triangles(TriMesh),
     /// Linear hexes.
     Hexes(HexMesh),
-    /// Quads of order 2..=4.
+    /// Quads or triangles of order 2..=4.
     Curved2(CurvedMesh<2>),
-    /// Hexes of order 2..=4.
+    /// Hexes or tetrahedra of order 2..=4.
     Curved3(CurvedMesh<3>),
 }
 
@@ -360,10 +381,14 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
     let raw = read::parse(bytes, if linear_only { LINEAR[1] } else { CURVED[1] })?;
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
+    if top == 3 && raw.cell_shape(3) != Some(Shape::Hexahedron) {
+        return Err(raw.refused(3, "3D meshes of hexahedra; tetrahedral, prism and pyramid meshes are not curved yet (triangle meshes are)"));
+    }
     let (mesh, cell_tags) = match (top, order) {
         (3, 1) => raw.hex_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
-        (_, 1) => raw.quad_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,
+        (_, 1) if raw.cell_shape(2) == Some(Shape::Triangle) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Triangles(m), t))?,
+        (_, 1) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,
         _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved2(m), t))?,
     };
     Ok(Tagged { mesh, cell_tags, layout: raw.layout(), node_tags: raw.node_tags })

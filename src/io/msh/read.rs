@@ -10,17 +10,20 @@
 use std::collections::HashMap;
 use std::str::FromStr;
 
-use super::{syntax, MshError, Pos, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES};
+use super::{syntax, types, MshError, Pos};
+use crate::mesh::element::Shape;
 use crate::io::layout::Entity;
 
 /// What an element type is: its dimension, order and number of nodes.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Kind {
+    /// Its reference shape.
+    pub shape: Shape,
     /// 0 (point) to 3 (hex).
     pub dim: usize,
     /// Lagrange order, 1 for a point.
     pub order: usize,
-    /// Nodes per element, `(order + 1)^dim`.
+    /// Nodes per element ([`Shape::num_nodes`]).
     pub nodes: usize,
 }
 
@@ -35,15 +38,12 @@ pub(super) struct Accept {
 
 impl Accept {
     /// The kind of MSH element type `t` if it is one of the accepted: a
-    /// point (15), or a Lagrange line, quad or hex of order 1..=4.
+    /// point (15), or a Lagrange element of the type table
+    /// ([`types::MSH_TYPES`]).
     pub fn kind(&self, t: i64) -> Option<Kind> {
-        let order = |types: &[i64; 4]| types.iter().position(|&x| x == t).map(|i| i + 1);
-        let point = (t == 15).then_some(Kind { dim: 0, order: 1, nodes: 1 });
-        let tables = [(1, &MSH_LINE_TYPES), (2, &MSH_QUAD_TYPES), (3, &MSH_HEX_TYPES)];
-        let kind = tables.into_iter().find_map(|(dim, types)| {
-            order(types).map(|p| Kind { dim, order: p, nodes: (p + 1).pow(dim as u32) })
-        });
-        point.or(kind).filter(|k| k.dim <= self.max_dim && k.order <= self.max_order)
+        let (shape, order) = types::shape_of(t)?;
+        let kind = Kind { shape, dim: shape.dim(), order, nodes: shape.num_nodes(order) };
+        (kind.dim <= self.max_dim && kind.order <= self.max_order).then_some(kind)
     }
 }
 

@@ -231,7 +231,7 @@ fn layouts_survive_a_round_trip() {
         assert!(text.starts_with("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n1 1 \"xmin\"\n"), "{}", &text[..200]);
         // boundary element 1 on part 1's curve, in its group; nodes in Gmsh's order
         let first = &layout.elements[0];
-        let gmsh: Vec<String> = crate::mesh::element::to_format(&build::tensor_perm(1, p), &first.nodes).iter().map(|&n| (n + 1).to_string()).collect();
+        let gmsh: Vec<String> = crate::mesh::element::to_format(&super::types::gmsh_perm(crate::mesh::element::Shape::Line, p), &first.nodes).iter().map(|&n| (n + 1).to_string()).collect();
         assert!(text.contains(&format!("\n1 {} 2 {} {} {}\n", MSH_LINE_TYPES[p - 1], first.entity, first.entity, gmsh.join(" "))));
         let back = round_trip(&layout);
         assert_eq!(kept(&back), kept(&layout), "p = {p}");

@@ -26,7 +26,7 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
-use super::build::tensor_perm;
+use super::types::gmsh_perm;
 use super::read::{physical_names, Accept, Block, PeriodicTags, Raw, Reader};
 use super::write::msh_type;
 use super::{syntax, MshError, Pos};
@@ -332,10 +332,10 @@ pub fn layout_text_22(layout: &Layout) -> String {
     let copies: Vec<&[i64]> = layout.elements.iter().map(|el| groups_of(el.shape.dim(), el.entity)).collect();
     let renumber = copies.iter().any(|g| g.len() > 1);
     put!(out, "$Elements\n{}", copies.iter().map(|g| g.len()).sum::<usize>());
-    let mut perms: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
+    let mut perms: HashMap<(crate::mesh::element::Shape, usize), Vec<usize>> = HashMap::new();
     let mut line = 0u64;
     for (el, groups) in layout.elements.iter().zip(copies) {
-        let perm = perms.entry((el.shape.dim(), el.order)).or_insert_with(|| tensor_perm(el.shape.dim(), el.order));
+        let perm = perms.entry((el.shape, el.order)).or_insert_with(|| gmsh_perm(el.shape, el.order));
         let nodes: String = to_format(perm, &el.nodes).into_iter().map(|v| format!(" {}", layout.node_tags[v])).collect();
         let ty = msh_type(el.shape, el.order);
         for &g in groups {

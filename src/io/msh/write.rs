@@ -5,23 +5,24 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::build::tensor_perm;
-use super::{MshError, MSH_HEX_TYPES, MSH_LINE_TYPES, MSH_QUAD_TYPES};
+use super::types::gmsh_perm;
+use super::MshError;
 use crate::io::fmt_f64;
-use crate::io::layout::{Layout, Shape};
+use crate::io::layout::Layout;
+use crate::mesh::element::Shape;
 use crate::mesh::element::{to_format, Spacing};
 use crate::mesh::file::write_atomic;
-use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
+use crate::mesh::{CurvedMesh, HexMesh, PlaneMesh};
 
-/// The quad mesh as MSH 4.1 ASCII text. The mesh is assumed valid;
-/// [`write_msh`] checks that first. Coordinates are printed with
+/// The quad or triangle mesh as MSH 4.1 ASCII text. The mesh is assumed
+/// valid; [`write_msh`] checks that first. Coordinates are printed with
 /// round-trip precision, so reading gives the same bits.
-pub fn msh_string(mesh: &QuadMesh) -> String {
+pub fn msh_string<const N: usize>(mesh: &PlaneMesh<N>) -> String {
     msh_text(&CurvedMesh::from_quads(mesh))
 }
 
 /// Checks `mesh` and writes it atomically to `path` as MSH 4.1 ASCII.
-pub fn write_msh(path: &Path, mesh: &QuadMesh) -> Result<(), MshError> {
+pub fn write_msh<const N: usize>(path: &Path, mesh: &PlaneMesh<N>) -> Result<(), MshError> {
     CurvedMesh::from_quads(mesh).write_msh(path)
 }
 
@@ -163,7 +164,7 @@ fn push_elements(out: &mut String, layout: &Layout) {
     put!(out, "$Elements\n{} {} {lo} {hi}", blocks.len(), layout.elements.len());
     for block in blocks {
         let first = &layout.elements[block[0]];
-        let perm = tensor_perm(first.shape.dim(), first.order);
+        let perm = gmsh_perm(first.shape, first.order);
         put!(out, "{} {} {} {}", first.shape.dim(), first.entity, msh_type(first.shape, first.order), block.len());
         for &e in block {
             let el = &layout.elements[e];
@@ -178,13 +179,12 @@ fn push_elements(out: &mut String, layout: &Layout) {
 }
 
 /// The MSH element type of a shape of order `p` (1..=4).
+///
+/// # Panics
+/// For a shape outside the type table: layouts hold only elements the
+/// readers read or the method made, all in it.
 pub fn msh_type(shape: Shape, p: usize) -> i64 {
-    match shape {
-        Shape::Point => 15,
-        Shape::Line => MSH_LINE_TYPES[p - 1],
-        Shape::Quad => MSH_QUAD_TYPES[p - 1],
-        Shape::Hex => MSH_HEX_TYPES[p - 1],
-    }
+    super::types::msh_type(shape, p).unwrap_or_else(|| panic!("no MSH type for {shape:?} of order {p}"))
 }
 
 /// `$Periodic`, if the layout has links.

@@ -1,0 +1,87 @@
+"""Triangle meshes made by Gmsh (MSH 4.1, linear), for the tests and the
+benchmarks of triangle curving:
+
+  layer  the square [-2, 2]^2 minus the circle r = 0.5, a triangle boundary
+         layer on the circle (Gmsh's BoundaryLayer field: first height
+         FIRST, ratio 1.3, thickness 0.06), size SIZE on the circle and
+         FAR at the square's corners; groups wall, farfield, fluid
+         (the issue's mesh: FIRST 1e-4, SIZE 0.05, FAR 0.3: 3,481 triangles)
+  disk   the disk r = 1 of triangles of size SIZE; groups wall, fluid
+
+With --order P, also Gmsh's own curving of the same mesh on the same CAD
+(--method setorder, fastcurving or elastic), judged as `deformesh curve`
+judges its result: prints JSON {"method", "order", "elements", "invalid"
+(minDetJac <= 0), "min_sj", "boundary_sample_distance" (the largest
+distance of 17 points per wall edge to the circle), "seconds"}.
+
+Usage: python triangle_meshes.py KIND OUT.msh [--first H] [--size S] [--far F]
+       [--order P] [--method M]"""
+import argparse, json, math, time
+import gmsh
+
+ap = argparse.ArgumentParser()
+ap.add_argument("kind", choices=["layer", "disk"])
+ap.add_argument("out")
+ap.add_argument("--first", type=float, default=1e-4)
+ap.add_argument("--size", type=float, default=0.05)
+ap.add_argument("--far", type=float, default=0.3)
+ap.add_argument("--order", type=int)
+ap.add_argument("--method", choices=["setorder", "fastcurving", "elastic"], default="setorder")
+a = ap.parse_args()
+gmsh.initialize()
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+g = gmsh.model.geo
+c0 = g.addPoint(0, 0, 0)
+r = 0.5 if a.kind == "layer" else 1.0
+ci = [g.addPoint(r * math.cos(k * math.pi / 2), r * math.sin(k * math.pi / 2), 0, a.size) for k in range(4)]
+arcs = [g.addCircleArc(ci[k], c0, ci[(k + 1) % 4]) for k in range(4)]
+if a.kind == "layer":
+    L = 2.0
+    sq = [g.addPoint(x, y, 0, a.far) for x, y in [(-L, -L), (L, -L), (L, L), (-L, L)]]
+    sides = [g.addLine(sq[k], sq[(k + 1) % 4]) for k in range(4)]
+    s = g.addPlaneSurface([g.addCurveLoop(sides), g.addCurveLoop(arcs)])
+    g.synchronize()
+    f = gmsh.model.mesh.field
+    bl = f.add("BoundaryLayer")
+    f.setNumbers(bl, "CurvesList", arcs)
+    f.setNumber(bl, "Size", a.first)
+    f.setNumber(bl, "Ratio", 1.3)
+    f.setNumber(bl, "Thickness", 0.06)
+    f.setAsBoundaryLayer(bl)
+    gmsh.model.addPhysicalGroup(1, arcs, name="wall")
+    gmsh.model.addPhysicalGroup(1, sides, name="farfield")
+else:
+    s = g.addPlaneSurface([g.addCurveLoop(arcs)])
+    g.synchronize()
+    gmsh.model.addPhysicalGroup(1, arcs, name="wall")
+gmsh.model.addPhysicalGroup(2, [s], name="fluid")
+gmsh.model.mesh.generate(2)
+gmsh.write(a.out)
+if a.order:
+    import numpy as np
+
+    p = a.order
+    t0 = time.perf_counter()
+    gmsh.model.mesh.setOrder(p)
+    if a.method != "setorder":
+        gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if a.method == "fastcurving" else 3)
+        gmsh.model.mesh.optimize("HighOrderFastCurving" if a.method == "fastcurving" else "HighOrderElastic")
+    secs = time.perf_counter() - t0
+    tags = np.concatenate(gmsh.model.mesh.getElements(2)[1])
+    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
+    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+    lt = gmsh.model.mesh.getElementType("Line", p)
+    uvw = [c for k in range(17) for c in (-1 + k / 8, 0, 0)]
+    bf = np.reshape(gmsh.model.mesh.getBasisFunctions(lt, uvw, "Lagrange")[1], (17, -1))
+    nt, xyz, _ = gmsh.model.mesh.getNodes()
+    x = np.zeros((int(nt.max()) + 1, 3))
+    x[nt] = np.reshape(xyz, (-1, 3))
+    worst = 0.0
+    for arc in arcs:
+        nodes = np.reshape(gmsh.model.mesh.getElementsByType(lt, arc)[1], (-1, bf.shape[1]))
+        pts = np.einsum("qn,enc->eqc", bf, x[nodes])
+        worst = max(worst, float(np.abs(np.hypot(pts[..., 0], pts[..., 1]) - r).max()))
+    print(json.dumps({"method": a.method, "order": p, "elements": int(len(tags)), "invalid": int((dj <= 0).sum()),
+                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
+gmsh.finalize()
