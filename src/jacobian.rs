@@ -457,11 +457,13 @@ pub fn normalise<const D: usize, const N: usize>(
     Ok(Normalisation { t, c: inv_g / volume0, c_dot: (dt_term + flux) / volume0 })
 }
 
-/// The boundary-flux quadrature of a Q1 mesh: pairs (x, v·n dS) at the
-/// Gauss points (2 per direction) of every boundary facet `[usize; K]`, for
-/// nodal boundary velocities `velocity`. A facet is an edge in 2D (K = 2,
-/// the domain on its left) or a bilinear face in 3D (K = 4, its nodes
-/// counter-clockwise seen from outside), so that n points outward.
+/// The boundary-flux quadrature of a linear mesh: pairs (x, v·n dS) at
+/// the quadrature points of every boundary facet `[usize; K]`, for nodal
+/// boundary velocities `velocity`. A facet is an edge in 2D (K = 2, the
+/// domain on its left; 2 Gauss points), a bilinear face (K = 4; 2 × 2
+/// Gauss points) or a triangle (K = 3; the 3-point rule) in 3D, its nodes
+/// counter-clockwise seen from outside, so that n points outward. Each
+/// rule has K points and is exact for the linear v·n of a flat facet.
 pub fn facet_flux_points<'a, const D: usize, const K: usize>(
     facets: impl Iterator<Item = [usize; K]> + 'a,
     nodes: &'a [[f64; D]],
@@ -470,21 +472,35 @@ pub fn facet_flux_points<'a, const D: usize, const K: usize>(
     facets.flat_map(move |f| {
         let (p, w) = (f.map(|n| nodes[n]), f.map(|n| velocity[n]));
         (0..K).map(move |k| {
-            // the facet's shape functions at Gauss point k (an edge: η = 0)
-            let (xi, eta) = (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 });
-            let n = [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta];
+            // the facet's shape functions at quadrature point k
+            let n: [f64; 4] = if K == 3 {
+                let [xi, eta] = TRIANGLE_POINTS[k];
+                [1.0 - xi - eta, xi, eta, 0.0]
+            } else {
+                let (xi, eta) = (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 });
+                [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta]
+            };
             let at = |q: &[[f64; D]; K]| -> [f64; D] { std::array::from_fn(|i| (0..K).map(|a| n[a] * q[a][i]).sum()) };
+            let (xi, eta) = if K == 3 { (0.0, 0.0) } else { (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 }) };
             (at(&p), dot(at(&w), weighted_normal(&p, xi, eta)))
         })
     })
 }
 
-/// n dS at (ξ, η) of a facet times its Gauss weight (1/2 on an edge, 1/4
-/// on a face): the tangent turned clockwise, or ∂x/∂ξ × ∂x/∂η.
+/// The 3-point rule of the unit triangle (weights 1/6 each).
+const TRIANGLE_POINTS: [[f64; 2]; 3] = [[1.0 / 6.0, 1.0 / 6.0], [2.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 2.0 / 3.0]];
+
+/// n dS at (ξ, η) of a facet times its quadrature weight (1/2 on an edge,
+/// 1/4 on a bilinear face, 1/6 on a flat triangle): the tangent turned
+/// clockwise, or ∂x/∂ξ × ∂x/∂η.
 fn weighted_normal<const D: usize, const K: usize>(p: &[[f64; D]; K], xi: f64, eta: f64) -> [f64; D] {
     let mut n = [0.0; D];
     match (&p[..], &mut n[..]) {
         ([a, b], [n0, n1]) => (*n0, *n1) = (0.5 * (b[1] - a[1]), 0.5 * -(b[0] - a[0])),
+        ([p0, p1, p2], [_, _, _]) => {
+            let (e1, e2): ([f64; 3], [f64; 3]) = (std::array::from_fn(|i| p1[i] - p0[i]), std::array::from_fn(|i| p2[i] - p0[i]));
+            n.copy_from_slice(&scale(1.0 / 6.0, cross3(e1, e2)));
+        }
         ([p0, p1, p2, p3], [_, _, _]) => {
             let dxi: [f64; 3] = std::array::from_fn(|i| (1.0 - eta) * (p1[i] - p0[i]) + eta * (p2[i] - p3[i]));
             let deta: [f64; 3] = std::array::from_fn(|i| (1.0 - xi) * (p3[i] - p0[i]) + xi * (p2[i] - p1[i]));
@@ -503,6 +519,7 @@ pub fn edge_flux_points<'a, const N: usize>(mesh: &'a PlaneMesh<N>, nodes: &'a [
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::QuadMesh;
 
     fn expr(s: &str) -> Expr {
         Expr::parse(s, &EXPR_VARS).unwrap()

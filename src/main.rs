@@ -50,7 +50,7 @@ enum Command {
     /// OUT.vtu, OUT.png, OUT.report.json beside it) if every element is
     /// certified valid.
     Curve {
-        /// The linear quad or hex mesh (Gmsh MSH 4.1, ASCII or binary).
+        /// The linear triangle, quad, tetrahedral or hex mesh (Gmsh MSH 4.1, ASCII or binary, or MSH 2.2).
         mesh: PathBuf,
         /// The geometry file (TOML `[[group]]` tables: name, kind, shape).
         #[arg(long)]
@@ -87,7 +87,7 @@ enum Command {
         #[arg(long)]
         format: Option<String>,
     },
-    /// Print quality figures of a quad or hex mesh (linear or high order) in Gmsh MSH 4.1 format.
+    /// Print quality figures of a triangle, quad, tetrahedral or hex mesh (linear or high order) in Gmsh MSH format.
     Quality {
         /// The mesh file.
         mesh: PathBuf,
@@ -402,7 +402,7 @@ fn format_curved(q: &CurvedQuality) -> String {
     )
 }
 
-/// Quality figures of a linear or high-order quad or hex MSH file, with
+/// Quality figures of a linear or high-order MSH file of one kind of cell, with
 /// invalid cells named by their element tags in the file.
 fn quality_of(path: &Path) -> Result<Figures> {
     use deformesh::io::msh::AnyMesh;
@@ -419,6 +419,7 @@ fn quality_of(path: &Path) -> Result<Figures> {
         AnyMesh::Quads(m) => deformesh::quality::mesh_quality(&m),
         AnyMesh::Triangles(m) => deformesh::quality::mesh_quality(&m),
         AnyMesh::Hexes(m) => deformesh::quality::hex_mesh_quality(&m),
+        AnyMesh::Tetrahedra(m) => deformesh::quality::tet_mesh_quality(&m),
     };
     q.invalid_cells = to_tags(&q.invalid_cells, &tags);
     Ok(Figures::Linear(q))

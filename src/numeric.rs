@@ -5,6 +5,7 @@
 //! [`bezier`].
 
 pub mod bezier;
+pub mod simplex_bezier;
 
 /// Machine epsilon, used for root-finding and convergence tolerances.
 pub const EPS: f64 = f64::EPSILON;

@@ -21,7 +21,7 @@ pub mod simplex;
 
 use crate::jacobian::{lift, JacobianField, Normalisation};
 use crate::lsfem::{cell_quadrature, q1_eval};
-use crate::mesh::{HexMesh, PlaneMesh, Point2, Point3};
+use crate::mesh::{HexMesh, PlaneMesh, Point2, Point3, TetMesh};
 use crate::numeric::{dot, scale, sub, triple};
 use certify::{det_j_bounds, invalid_cells};
 use rayon::prelude::*;
@@ -135,6 +135,28 @@ pub fn hex_mesh_quality(mesh: &HexMesh) -> MeshQuality {
     linear_quality(&mesh.cells, &mesh.nodes, |p| (hex_scaled_jacobian(p), cell_size(p)))
 }
 
+/// [`hex_mesh_quality`] of a tetrahedral mesh, with
+/// [`tet_scaled_jacobian`].
+pub fn tet_mesh_quality(mesh: &TetMesh) -> MeshQuality {
+    linear_quality(&mesh.cells, &mesh.nodes, |p| (tet_scaled_jacobian(p), cell_size(p)))
+}
+
+/// The least, over the corners of a linear tetrahedron, triple product of
+/// the unit edges leaving the corner, times √2 so that the regular
+/// tetrahedron gives 1 (Gmsh's scaled Jacobian of a linear tet); 0 for a
+/// collapsed edge.
+pub fn tet_scaled_jacobian(p: &[Point3; 4]) -> f64 {
+    // per corner, the other three in an order of the same orientation
+    const AT: [[usize; 4]; 4] = [[0, 1, 2, 3], [1, 0, 3, 2], [2, 3, 0, 1], [3, 2, 1, 0]];
+    AT.iter()
+        .map(|&[c, a, b, d]| {
+            let (e1, e2, e3) = (sub(p[a], p[c]), sub(p[b], p[c]), sub(p[d], p[c]));
+            let lengths = (dot(e1, e1) * dot(e2, e2) * dot(e3, e3)).sqrt();
+            if lengths > 0.0 { std::f64::consts::SQRT_2 * triple(e1, e2, e3) / lengths } else { 0.0 }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Extremes over a set of values.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 pub struct Range {
@@ -231,6 +253,8 @@ pub fn jf_stats(ratios: &[f64], start_areas: &[f64]) -> JfStats {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::lsfem::gauss_points;
+    use crate::mesh::QuadMesh;
 
     /// A small deterministic generator (xorshift64*) of numbers in [0, 1).
     pub(crate) struct Rng(pub(crate) u64);

@@ -29,7 +29,7 @@
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
 use crate::mesh::element::{nodes_1d, simplex, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, PlaneMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, PlaneMesh, TetMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use std::collections::HashMap;
 
@@ -68,6 +68,19 @@ impl Subdividable<3, 8> for HexMesh {
     fn assemble(nodes: Vec<[f64; 3]>, cells: Vec<[usize; 8]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self {
         let faces = facets.into_iter().map(|(n, part)| BoundaryFace { nodes: [n[0], n[1], n[2], n[3]], part }).collect();
         HexMesh { nodes, cells, faces, part_names: names }
+    }
+}
+
+impl Subdividable<3, 4> for TetMesh {
+    fn facets(&self) -> Vec<(Vec<usize>, usize)> {
+        self.faces.iter().map(|f| (f.nodes.to_vec(), f.part)).collect()
+    }
+    fn names(&self) -> &[String] {
+        &self.part_names
+    }
+    fn assemble(nodes: Vec<[f64; 3]>, cells: Vec<[usize; 4]>, facets: Vec<(Vec<usize>, usize)>, names: Vec<String>) -> Self {
+        let faces = facets.into_iter().map(|(n, part)| BoundaryFace { nodes: [n[0], n[1], n[2]], part }).collect();
+        TetMesh { nodes, cells, faces, part_names: names }
     }
 }
 
@@ -338,36 +351,36 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
     let mut edge_ids: HashMap<(usize, usize), usize> = HashMap::new();
     let mut on_facets: HashMap<usize, Vec<(usize, [f64; 2])>> = HashMap::new();
     for (f, (q, part)) in coarse_facets.into_iter().enumerate() {
-        let (nu, nv) = if D == 2 { (n1, 1) } else { (n1, n1) };
-        let mut grid = Vec::with_capacity(nu * nv);
-        for v in 0..nv {
-            for u in 0..nu {
-                let key = facet_key(&q, u, v, p);
-                let id = ids[&key];
-                grid.push(id);
-                places[id] = match key {
-                    Key::Vertex(_) => Place::Vertex,
-                    Key::Edge(a, b, k) if D == 3 => {
-                        let e = *edge_ids.entry((a, b)).or_insert_with(|| {
-                            edges.push(([coarse.nodes()[a], coarse.nodes()[b]], Vec::new()));
-                            edges.len() - 1
-                        });
-                        if !edges[e].1.contains(&f) {
-                            edges[e].1.push(f);
-                        }
-                        let on = on_facets.entry(id).or_default();
-                        if !on.iter().any(|o| o.0 == f) {
-                            on.push((f, [t[u], t[v]]));
-                        }
-                        Place::Edge { edge: e, sigma: t[k] }
+        let nodes_here = facet_nodes::<D>(&q, p, &t, spacing);
+        let mut grid = Vec::with_capacity(nodes_here.len());
+        for &(key, s) in &nodes_here {
+            let id = ids[&key];
+            grid.push(id);
+            places[id] = match key {
+                Key::Vertex(_) => Place::Vertex,
+                Key::Edge(a, b, k) if D == 3 => {
+                    let e = *edge_ids.entry((a, b)).or_insert_with(|| {
+                        edges.push(([coarse.nodes()[a], coarse.nodes()[b]], Vec::new()));
+                        edges.len() - 1
+                    });
+                    if !edges[e].1.contains(&f) {
+                        edges[e].1.push(f);
                     }
-                    _ => Place::Facet { facet: f, s: [t[u], if D == 2 { 0.0 } else { t[v] }] },
-                };
-            }
+                    let on = on_facets.entry(id).or_default();
+                    if !on.iter().any(|o| o.0 == f) {
+                        on.push((f, s));
+                    }
+                    Place::Edge { edge: e, sigma: t[k] }
+                }
+                _ => Place::Facet { facet: f, s },
+            };
         }
         // fine facets keep the coarse facet's orientation
         if D == 2 {
             fine_facets.extend(grid.windows(2).map(|w| (vec![w[0], w[1]], part)));
+        } else if q.len() == 3 {
+            let subs = simplex::sub_simplices(Shape::Triangle, p);
+            fine_facets.extend(subs.iter().map(|s| (vec![grid[s[0]], grid[s[1]], grid[s[2]]], part)));
         } else {
             for v in 0..p {
                 for u in 0..p {
@@ -481,17 +494,39 @@ fn simplex_elements<M: Subdividable<D, N>, const D: usize, const N: usize>(
 /// is not 0, so neighbours find the same node.
 fn simplex_key<const D: usize, const N: usize>(c: usize, cell: &[usize; N], idx: [usize; 3], p: usize) -> Key {
     let bary: [usize; N] = std::array::from_fn(|a| if a == 0 { p - idx[..D].iter().sum::<usize>() } else { idx[a - 1] });
-    let on: Vec<usize> = (0..N).filter(|&a| bary[a] != 0).collect();
+    sub_simplex_key(&cell[..], &bary, p, D == 3).unwrap_or(Key::Cell(c, idx))
+}
+
+/// The key of the node with barycentric indices `bary` on the simplex
+/// with corners `corners`, if it lies on one of the parts neighbours
+/// share: a vertex, an edge, or (`triangles_shared`: in a tetrahedral
+/// mesh) a triangle. None: inside the cell.
+fn sub_simplex_key(corners: &[usize], bary: &[usize], p: usize, triangles_shared: bool) -> Option<Key> {
+    let on: Vec<usize> = (0..corners.len()).filter(|&a| bary[a] != 0).collect();
     match on.len() {
-        1 => Key::Vertex(cell[on[0]]),
-        2 => edge_key(cell[on[0]], cell[on[1]], bary[on[1]], p),
-        3 if N == 4 => {
-            let mut by_id: Vec<(usize, usize)> = on.iter().map(|&a| (cell[a], bary[a])).collect();
+        1 => Some(Key::Vertex(corners[on[0]])),
+        2 => Some(edge_key(corners[on[0]], corners[on[1]], bary[on[1]], p)),
+        3 if triangles_shared => {
+            let mut by_id: Vec<(usize, usize)> = on.iter().map(|&a| (corners[a], bary[a])).collect();
             by_id.sort_unstable();
-            Key::TriFace([by_id[0].0, by_id[1].0, by_id[2].0], [by_id[0].1, by_id[1].1, by_id[2].1])
+            Some(Key::TriFace([by_id[0].0, by_id[1].0, by_id[2].0], [by_id[0].1, by_id[1].1, by_id[2].1]))
         }
-        _ => Key::Cell(c, idx),
+        _ => None,
     }
+}
+
+/// The fine nodes of boundary facet `q` in the facet's own order (tensor
+/// order of an edge or quad, lattice order of a triangle), each by its
+/// key and its reference coordinates on the facet (an edge's in `s[0]`).
+fn facet_nodes<const D: usize>(q: &[usize], p: usize, t: &[f64], spacing: Spacing) -> Vec<(Key, [f64; 2])> {
+    let n1 = p + 1;
+    if q.len() == 3 {
+        let space = simplex::space(Shape::Triangle, p, spacing).expect("the order was checked");
+        let lattice = simplex::lattice(Shape::Triangle, p);
+        return lattice.iter().zip(&space.nodes).map(|(l, x)| (sub_simplex_key(q, &[p - l[0] - l[1], l[0], l[1]], p, true).expect("a face node"), [x[0], x[1]])).collect();
+    }
+    let nv = if D == 2 { 1 } else { n1 };
+    (0..nv).flat_map(|v| (0..n1).map(move |u| (u, v))).map(|(u, v)| (facet_key(q, u, v, p), [t[u], if D == 2 { 0.0 } else { t[v] }])).collect()
 }
 
 /// How far the settling pass lets nodes move, in multiples of its largest
@@ -553,7 +588,8 @@ pub enum Role2 {
 /// A flat coarse facet or edge that carries sliding nodes.
 #[derive(Clone, Debug)]
 struct Carrier<const D: usize> {
-    /// 2 (a segment) or 4 (a bilinear quad) corner positions.
+    /// 2 (a segment), 3 (a flat triangle: s are its reference
+    /// coordinates) or 4 (a bilinear quad) corner positions.
     corners: Vec<[f64; D]>,
     /// The part whose image X applies, if any (else X = identity).
     part: Option<usize>,
@@ -570,6 +606,9 @@ impl<const D: usize> Carrier<D> {
         let c = &self.corners;
         if c.len() == 2 {
             return std::array::from_fn(|i| (1.0 - s[0]) * c[0][i] + s[0] * c[1][i]);
+        }
+        if c.len() == 3 {
+            return std::array::from_fn(|i| (1.0 - s[0] - s[1]) * c[0][i] + s[0] * c[1][i] + s[1] * c[2][i]);
         }
         let w = [(1.0 - s[0]) * (1.0 - s[1]), s[0] * (1.0 - s[1]), s[0] * s[1], (1.0 - s[0]) * s[1]];
         std::array::from_fn(|i| (0..4).map(|k| w[k] * c[k][i]).sum())
@@ -663,6 +702,9 @@ impl<const D: usize> RefineBoundary<D> {
             let car = &self.carriers[carrier];
             let Some(k) = car.part else { continue };
             let place = match plan[i] {
+                // a triangle's iso-lines end on its hypotenuse, not at 1:
+                // its nodes go to the images of their flat places
+                Settle::Arc if car.corners.len() == 3 => s,
                 Settle::Arc => self.arc_parameter(carrier, s),
                 Settle::Image => s,
                 Settle::Keep => {
@@ -876,6 +918,11 @@ impl<const D: usize> RefineBoundary<D> {
             let mut next = [s[0] + ds[0], s[1] + ds[1]];
             if car.bounded {
                 next = next.map(|v| v.clamp(0.0, 1.0));
+                if car.corners.len() == 3 && next[0] + next[1] > 1.0 {
+                    // back onto the triangle's hypotenuse
+                    let over = 0.5 * (next[0] + next[1] - 1.0);
+                    next = [next[0] - over, next[1] - over].map(|v| v.clamp(0.0, 1.0));
+                }
             }
             let moved = (next[0] - s[0]).abs() + (next[1] - s[1]).abs();
             s = next;
@@ -959,8 +1006,13 @@ impl<const D: usize> BoundaryModel<D> for RefineBoundary<D> {
 
 /// Unit normal of a bilinear facet with corners `c` at s (zero if degenerate).
 fn facet_normal<const D: usize>(c: &[[f64; D]], s: [f64; 2]) -> [f64; 3] {
-    if D != 3 || c.len() != 4 {
+    if D != 3 || c.len() < 3 {
         return [0.0; 3];
+    }
+    if c.len() == 3 {
+        let n = crate::numeric::cross3(std::array::from_fn(|i| c[1][i] - c[0][i]), std::array::from_fn(|i| c[2][i] - c[0][i]));
+        let l = dot(n, n).sqrt();
+        return if l > 0.0 { n.map(|x| x / l) } else { [0.0; 3] };
     }
     let du: [f64; 3] = std::array::from_fn(|i| (1.0 - s[1]) * (c[1][i] - c[0][i]) + s[1] * (c[2][i] - c[3][i]));
     let dv: [f64; 3] = std::array::from_fn(|i| (1.0 - s[0]) * (c[3][i] - c[0][i]) + s[0] * (c[2][i] - c[1][i]));

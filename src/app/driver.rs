@@ -14,7 +14,7 @@ use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
-use crate::mesh::{polygon_area, HexMesh, PlaneMesh, Point2, Point3};
+use crate::mesh::{polygon_area, HexMesh, PlaneMesh, Point2, Point3, SolidMesh, TetMesh};
 use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
@@ -336,6 +336,38 @@ impl Outputs<3, 8> for HexMesh {
     }
     fn scaled_jacobians(&self) -> Vec<f64> {
         (0..self.num_cells()).map(|c| crate::quality::hex_scaled_jacobian(&self.cell_coords(c))).collect()
+    }
+    fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
+        self.cells.iter().map(|c| crate::quality::cell_size(&c.map(|n| nodes[n]))).collect()
+    }
+    fn msh(&self) -> String {
+        hex_msh_string(self)
+    }
+    fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
+        hex_vtu_string(self, cell_data, &[])
+    }
+    fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        Self::draw_curved(&CurvedMesh { nodes: nodes.to_vec(), ..CurvedMesh::from_hexes(self) }, values, look)
+    }
+    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
+        curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
+    }
+    fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        render_hexes(mesh, values, &options3(look))
+    }
+}
+
+impl Outputs<3, 4> for TetMesh {
+    const DEFINITIONS: Definitions = Definitions {
+        det_j: "determinant of the linear map from the reference tetrahedron (0,0,0),(1,0,0),(0,1,0),(0,0,1), constant on a cell (Gmsh's reference is the same)",
+        scaled_jacobian: "per cell, min over corners of the triple product of unit edge vectors times sqrt 2: 1 for the regular tetrahedron",
+        jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (4-point rule, exact for quadratic f); 1 is perfect",
+    };
+    fn quality(&self) -> MeshQuality {
+        crate::quality::tet_mesh_quality(self)
+    }
+    fn scaled_jacobians(&self) -> Vec<f64> {
+        (0..self.num_cells()).map(|c| crate::quality::tet_scaled_jacobian(&self.cell_coords(c))).collect()
     }
     fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
         self.cells.iter().map(|c| crate::quality::cell_size(&c.map(|n| nodes[n]))).collect()
@@ -694,17 +726,30 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let fine_cells = |d: u32| job.options.order.max(1).pow(d);
     let tags = &read.cell_tags;
     let result = match read.mesh {
-        AnyMesh::Hexes(mesh) => {
-            let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, &gfile)?;
-            geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), &gfile)?;
-            let (mesh, shared) = one_group_per_facet(&mesh, &unbound, &gfile)?;
-            curve_mesh(&mesh, &parts, (unbound, &shared), 0, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3)))
-        }
+        AnyMesh::Hexes(mesh) => curve_solid(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
+        AnyMesh::Tetrahedra(mesh) => curve_solid(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
         AnyMesh::Quads(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         AnyMesh::Triangles(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
+}
+
+/// `curve` on a solid mesh of hexes or tetrahedra.
+fn curve_solid<const N: usize, const K: usize>(
+    mesh: SolidMesh<N, K>,
+    geometry: &crate::app::bind::GeometryFile,
+    gfile: &str,
+    job: (&CurveJob, &crate::io::layout::Layout),
+    progress: &mut impl FnMut(Progress),
+) -> Result<CurveReport, RunError>
+where
+    SolidMesh<N, K>: Outputs<3, N>,
+{
+    let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, gfile)?;
+    geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), gfile)?;
+    let (mesh, shared) = one_group_per_facet(&mesh, &unbound, gfile)?;
+    curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, progress)
 }
 
 /// `curve` on a plane mesh of quads or triangles.

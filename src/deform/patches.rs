@@ -19,7 +19,7 @@
 use super::{BoundaryModel, BoundaryPart, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::jacobian::facet_flux_points;
 use crate::lsfem::Constraint;
-use crate::mesh::{HexMesh, Point3};
+use crate::mesh::{HexMesh, Point3, TetMesh};
 use crate::numeric::{cross3 as cross, dot, sub, unit};
 use crate::quality::cell_size;
 use std::collections::HashMap;
@@ -407,6 +407,37 @@ impl Q1Mesh<3, 8> for HexMesh {
         let b = classify(self, parts)?;
         b.check_reachable(self)?;
         Ok(b)
+    }
+}
+
+/// A tetrahedral mesh as Algorithm 2 takes it: `curve` builds its
+/// boundary model on the refined mesh ([`crate::refine`]); Algorithm 1's
+/// patches of box faces are for hex meshes.
+impl Q1Mesh<3, 4> for TetMesh {
+    type Boundary = Patches;
+
+    fn cells(&self) -> &[[usize; 4]] {
+        &self.cells
+    }
+
+    fn nodes(&self) -> &[Point3] {
+        &self.nodes
+    }
+
+    fn nodes_mut(&mut self) -> &mut Vec<Point3> {
+        &mut self.nodes
+    }
+
+    fn flux_points<'a>(&'a self, nodes: &'a [Point3], v: &'a [Point3]) -> impl Iterator<Item = (Point3, f64)> + 'a {
+        facet_flux_points(self.faces.iter().map(|f| f.nodes), nodes, v)
+    }
+
+    fn measure(&self) -> f64 {
+        (0..self.num_cells()).map(|c| cell_size(&self.cell_coords(c))).sum()
+    }
+
+    fn boundary(&self, _parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {
+        Err(DeformError::NoBoundaryModel("tetrahedral meshes"))
     }
 }
 

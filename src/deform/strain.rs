@@ -126,6 +126,7 @@ fn first_exit([a1, a2, a3]: [f64; 3], c: f64, h_max: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lsfem::q1_corner;
 
     fn det2(m: [[f64; 2]; 2]) -> f64 {
         m[0][0] * m[1][1] - m[0][1] * m[1][0]

@@ -644,9 +644,9 @@ where
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
-    let n1 = p + 1;
-    // corners of a tensor-ordered boundary element, in cyclic order
-    let corners = |f: &[usize]| if D == 2 { vec![f[0], f[p]] } else { vec![f[0], f[p], f[n1 * n1 - 1], f[n1 * p]] };
+    // corners of a boundary element, in cyclic order
+    let at = corner_positions(mesh.shape.facet_shape(), p);
+    let corners = |f: &[usize]| at.iter().map(|&c| f[c]).collect();
     if let Some(mut o) = worst_off_shape(&mesh.nodes, &fine_facets, corners, &parts2, &mesh.part_names, opts.shape_tolerance) {
         o.after = true;
         return Err(CurveError::OffShape(Box::new(o)));
@@ -1018,27 +1018,47 @@ fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: 
 /// Per part, the largest distance of the boundary sampled on a grid of
 /// `samples` points per direction of each boundary element to the shape.
 fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<Vec<f64>, HighOrderError> {
-    let basis = Basis1d::new(mesh.p, mesh.spacing)?;
     let m = samples.max(2);
-    let at: Vec<Vec<f64>> = (0..=m).map(|k| basis.eval(k as f64 / m as f64).0).collect();
-    let n1 = mesh.p + 1;
+    let weights = facet_sample_weights(mesh.shape.facet_shape(), mesh.p, mesh.spacing, m)?;
     Ok(per_part(mesh, parts, |b, target| {
         let mut worst = 0.0f64;
-        let vs: Vec<usize> = if D == 2 { vec![0] } else { (0..=m).collect() };
-        for &kv in &vs {
-            for ku in 0..=m {
-                let mut x = [0.0; D];
-                for (idx, &node) in b.nodes.iter().enumerate() {
-                    let w = if D == 2 { at[ku][idx] } else { at[ku][idx % n1] * at[kv][idx / n1] };
-                    for d in 0..D {
-                        x[d] += w * mesh.nodes[node][d];
-                    }
+        for w in &weights {
+            let mut x = [0.0; D];
+            for (&wi, &node) in w.iter().zip(&b.nodes) {
+                for d in 0..D {
+                    x[d] += wi * mesh.nodes[node][d];
                 }
-                worst = worst.max(target.distance(x));
             }
+            worst = worst.max(target.distance(x));
         }
         worst
     }))
+}
+
+/// The weights of a boundary element's nodes (its order, `shape`: a line,
+/// a quad in tensor order or a triangle in lattice order) at its samples:
+/// `m + 1` points per direction, ends included (on a triangle the lattice
+/// of `m + 1` points per edge).
+fn facet_sample_weights(shape: Shape, p: usize, spacing: Spacing, m: usize) -> Result<Vec<Vec<f64>>, HighOrderError> {
+    if shape == Shape::Triangle {
+        let space = crate::mesh::element::simplex::space(shape, p, spacing)?;
+        let n = space.nodes.len();
+        let (mut values, mut grads) = (vec![0.0; n], vec![[0.0; 3]; n]);
+        let points = (0..=m).flat_map(|j| (0..=m - j).map(move |i| [i as f64 / m as f64, j as f64 / m as f64, 0.0]));
+        return Ok(points
+            .map(|xi| {
+                space.eval(xi, &mut values, &mut grads);
+                values.clone()
+            })
+            .collect());
+    }
+    let basis = Basis1d::new(p, spacing)?;
+    let at: Vec<Vec<f64>> = (0..=m).map(|k| basis.eval(k as f64 / m as f64).0).collect();
+    let n1 = p + 1;
+    if shape == Shape::Line {
+        return Ok(at);
+    }
+    Ok((0..=m).flat_map(|kv| (0..=m).map(move |ku| (ku, kv))).map(|(ku, kv)| (0..n1 * n1).map(|idx| at[ku][idx % n1] * at[kv][idx / n1]).collect()).collect())
 }
 
 #[cfg(test)]

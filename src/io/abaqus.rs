@@ -78,6 +78,10 @@ pub enum AbaqusError {
     /// The mesh fails [`CurvedMesh::validate`].
     #[error("invalid mesh: {0}")]
     InvalidMesh(String),
+    /// Cells the HOHQMesh/Trixi form has no place for: it holds quads and
+    /// hexes only.
+    #[error("the ABAQUS form of HOHQMesh and Trixi.jl holds quads and hexes only, not {0:?}s")]
+    Shape(crate::mesh::element::Shape),
     /// A cell whose map is degenerate (or not finite) at its centre: it
     /// has no orientation to write.
     #[error("cell {cell} is degenerate: det J = {det:e} at its centre")]
@@ -268,6 +272,9 @@ fn key(mut nodes: Vec<usize>) -> Vec<usize> {
 /// boundary element, or part names that are not single words.
 pub fn abaqus_string<const D: usize>(mesh: &CurvedMesh<D>) -> Result<String, AbaqusError> {
     mesh.validate().map_err(AbaqusError::InvalidMesh)?;
+    if mesh.is_simplex() {
+        return Err(AbaqusError::Shape(mesh.shape));
+    }
     for name in &mesh.part_names {
         if name == INTERIOR || name.chars().any(char::is_whitespace) {
             return Err(AbaqusError::BadPartName(name.clone()));

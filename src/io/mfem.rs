@@ -86,6 +86,9 @@ pub enum MfemError {
     /// The mesh fails [`CurvedMesh::validate`].
     #[error("cannot write an MFEM mesh: {0}")]
     InvalidMesh(String),
+    /// Cells this writer has no MFEM node order for yet.
+    #[error("the MFEM writer takes quads and hexes for now, not {0:?}s: write the mesh as .msh (MFEM reads Gmsh's MSH 2.2 and 4.1)")]
+    Shape(crate::mesh::element::Shape),
     /// An attribute list whose length is not the number of cells or
     /// boundary elements.
     #[error("{found} {what} attributes given, the mesh has {expected} {what}s")]
@@ -146,6 +149,9 @@ pub fn mfem_string<const D: usize>(
     boundary_attributes: &[i64],
 ) -> Result<String, MfemError> {
     mesh.validate().map_err(MfemError::InvalidMesh)?;
+    if mesh.is_simplex() {
+        return Err(MfemError::Shape(mesh.shape));
+    }
     check_attributes("cell", cell_attributes, mesh.cells.len())?;
     check_attributes("boundary element", boundary_attributes, mesh.boundary.len())?;
     let topo = Topology::new(mesh)?;

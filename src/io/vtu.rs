@@ -10,7 +10,7 @@ use thiserror::Error;
 use super::fmt_f64;
 use crate::mesh::element::{simplex, to_format, vtk_hex_order, vtk_quad_order, Shape, Spacing};
 use crate::mesh::file::write_atomic;
-use crate::mesh::{CurvedMesh, HexMesh, PlaneMesh};
+use crate::mesh::{CurvedMesh, PlaneMesh, SolidMesh};
 
 /// VTK's cell type number for a linear quadrilateral.
 pub const VTK_QUAD: u8 = 9;
@@ -93,8 +93,8 @@ pub fn write_vtu<const N: usize>(
 /// The hex mesh as a VTK XML UnstructuredGrid ([`grid_string`] of the
 /// order-1 mesh): cells of type [`VTK_HEXAHEDRON`], whose node order is
 /// [`HexMesh`]'s.
-pub fn hex_vtu_string(
-    mesh: &HexMesh,
+pub fn hex_vtu_string<const N: usize, const K: usize>(
+    mesh: &SolidMesh<N, K>,
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 3]])],
 ) -> Result<String, VtuError> {
@@ -103,9 +103,9 @@ pub fn hex_vtu_string(
 
 /// Writes [`hex_vtu_string`] atomically to `path`; nothing is written if
 /// the input is rejected.
-pub fn write_hex_vtu(
+pub fn write_hex_vtu<const N: usize, const K: usize>(
     path: &Path,
-    mesh: &HexMesh,
+    mesh: &SolidMesh<N, K>,
     cell_data: &[(&str, &[f64])],
     point_vectors: &[(&str, &[[f64; 3]])],
 ) -> Result<(), VtuError> {
@@ -429,6 +429,7 @@ fn push_cell_data(out: &mut String, cell_data: &[(&str, &[f64])], attributes: Op
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::{HexMesh, QuadMesh};
     use crate::mesh::curved::tests::bend2;
     use crate::mesh::element::Spacing;
 

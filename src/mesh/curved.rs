@@ -7,7 +7,7 @@
 use super::element::basis::{tensor_map, Basis1d};
 use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
 use super::element::{simplex, Shape};
-use super::{HexMesh, PlaneMesh};
+use super::{PlaneMesh, SolidMesh};
 
 /// One boundary element: an order-`p` line (2D meshes) or quad (3D
 /// meshes) with its nodes in tensor order, and its part.
@@ -292,12 +292,16 @@ impl CurvedMesh<2> {
 }
 
 impl CurvedMesh<3> {
-    /// The linear hex mesh as the order-1 case (see [`CurvedMesh::from_quads`]).
-    pub fn from_hexes(m: &HexMesh) -> Self {
-        let (cell, face) = (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1"));
+    /// The linear hex or tetrahedral mesh as the order-1 case (see
+    /// [`CurvedMesh::from_quads`]; a tetrahedron's corners are its lattice
+    /// order).
+    pub fn from_hexes<const N: usize, const K: usize>(m: &SolidMesh<N, K>) -> Self {
+        let tet = N == 4;
+        let (cell, face) = if tet { (vec![0, 1, 2, 3], vec![0, 1, 2]) } else { (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1")) };
         let cells = m.cells.iter().map(|c| from_format(&cell, c)).collect();
         let boundary = m.faces.iter().map(|f| CurvedBoundary { nodes: from_format(&face, &f.nodes), part: f.part }).collect();
-        CurvedMesh { shape: Shape::Hexahedron, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+        let shape = if tet { Shape::Tetrahedron } else { Shape::Hexahedron };
+        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
 

@@ -381,13 +381,14 @@ mod colour_tests {
 /// A point or vector in space.
 pub type Point3 = [f64; 3];
 
-/// One quadrilateral face of the boundary of a hex mesh.
+/// One face of the boundary of a solid mesh: a quadrilateral (`K = 4`, of
+/// a hex mesh) or a triangle (`K = 3`, of a tetrahedral mesh).
 #[derive(Clone, Debug, PartialEq)]
-pub struct BoundaryFace {
-    /// The four nodes, counter-clockwise seen from outside (the
-    /// right-hand rule gives the outward normal).
-    pub nodes: [usize; 4],
-    /// Index into [`HexMesh::part_names`].
+pub struct BoundaryFace<const K: usize = 4> {
+    /// The nodes, counter-clockwise seen from outside (the right-hand
+    /// rule gives the outward normal).
+    pub nodes: [usize; K],
+    /// Index into [`SolidMesh::part_names`].
     pub part: usize,
 }
 
@@ -397,17 +398,25 @@ pub struct BoundaryFace {
 /// bottom face (ζ = 0) counter-clockwise seen from above, then the top face
 /// in the same order: (0,0,0) (1,0,0) (1,1,0) (0,1,0) (0,0,1) (1,0,1)
 /// (1,1,1) (0,1,1) in reference coordinates.
+///
+/// Tetrahedra (`N = 4`, faces `K = 3`) list their nodes as Gmsh's TET_4
+/// and VTK_TETRA do: (0,0,0) (1,0,0) (0,1,0) (0,0,1), positively oriented.
 #[derive(Clone, Debug, PartialEq)]
-pub struct HexMesh {
+pub struct SolidMesh<const N: usize = 8, const K: usize = 4> {
     /// Node coordinates.
     pub nodes: Vec<Point3>,
-    /// Cells as eight node indices.
-    pub cells: Vec<[usize; 8]>,
+    /// Cells as `N` node indices.
+    pub cells: Vec<[usize; N]>,
     /// Boundary faces with their part.
-    pub faces: Vec<BoundaryFace>,
+    pub faces: Vec<BoundaryFace<K>>,
     /// Names of the boundary parts (physical groups of dimension 2).
     pub part_names: Vec<String>,
 }
+
+/// A mesh of trilinear hexahedra.
+pub type HexMesh = SolidMesh<8, 4>;
+/// A mesh of linear tetrahedra.
+pub type TetMesh = SolidMesh<4, 3>;
 
 /// The six faces of a hex in local node numbers (Gmsh/VTK order), each
 /// counter-clockwise seen from outside a positively oriented cell:
@@ -481,6 +490,9 @@ impl HexMesh {
         HexMesh { nodes, cells, faces, part_names: BOX_FACES.iter().map(|s| s.to_string()).collect() }
     }
 
+}
+
+impl<const N: usize, const K: usize> SolidMesh<N, K> {
     /// Number of nodes.
     pub fn num_nodes(&self) -> usize {
         self.nodes.len()
@@ -491,8 +503,8 @@ impl HexMesh {
         self.cells.len()
     }
 
-    /// Coordinates of the eight nodes of cell `c`.
-    pub fn cell_coords(&self, c: usize) -> [Point3; 8] {
+    /// Coordinates of the nodes of cell `c`.
+    pub fn cell_coords(&self, c: usize) -> [Point3; N] {
         self.cells[c].map(|n| self.nodes[n])
     }
 }

@@ -1,22 +1,27 @@
-//! The 3D plan: the boundary surface of a hex mesh of any order, each face
-//! filled with the colour of its cell's value and shaded by a light from
-//! the camera's upper left, with its border drawn as the cell edges, a dark
-//! silhouette, the colour bar and a title, as in the 2D pictures.
+//! The 3D plan: the boundary surface of a mesh of hexahedra or
+//! tetrahedra of any order, each face filled with the colour of its cell's
+//! value and shaded by a light from the camera's upper left, with its
+//! border drawn as the cell edges, a dark silhouette, the colour bar and a
+//! title, as in the 2D pictures.
 //!
-//! Each boundary face is an `m × m` grid of small flat quads on the true
-//! face (`m = 1` at `p = 1`, whose faces are bilinear, `m = `
-//! [`SUBQUADS_PER_ORDER`]` · p` above), shaded by normals interpolated
-//! from the grid points; the edge lines follow the border of the whole
-//! face, so the sub-quads do not show.
+//! Each boundary face is sampled on a grid of `m` pieces a side on the
+//! true face (`m = 1` at `p = 1`, whose faces are bilinear quads or flat
+//! triangles, `m = `[`SUBQUADS_PER_ORDER`]` · p` above): a hex face
+//! through the hex map on an `m × m` grid of small quads, a tet face
+//! through its own Lagrange triangle (the face's nodes, the triangle space
+//! of the mesh's spacing) on a triangle grid of `m²` small triangles.
+//! From there on both are the same: pieces shaded by normals interpolated
+//! from the grid points, edge lines along the border of the whole face, so
+//! the pieces do not show.
 //!
-//! Hidden surfaces are removed with a z-buffer (two triangles per quad,
-//! rasterised by our own code), not by sorting faces, because sorting fails
-//! on concave meshes. The picture is rasterised at [`SUPERSAMPLE`]× the
-//! resolution each way and averaged down, which anti-aliases both the
-//! outline and the edge lines. Edge lines are drawn *inside* each face as
-//! it is rasterised (a pixel within half a line width of the face's border
-//! is darkened), so they take part in the depth test exactly like the
-//! faces and hidden edges never show.
+//! Hidden surfaces are removed with a z-buffer (each piece drawn as a fan
+//! of triangles, rasterised by our own code), not by sorting faces,
+//! because sorting fails on concave meshes. The picture is rasterised at
+//! [`SUPERSAMPLE`]× the resolution each way and averaged down, which
+//! anti-aliases both the outline and the edge lines. Edge lines are drawn
+//! *inside* each face as it is rasterised (a pixel within half a line
+//! width of the face's border is darkened), so they take part in the depth
+//! test exactly like the faces and hidden edges never show.
 //!
 //! With a [`ClipPlane`], cells whose corner mean lies on the positive side
 //! of the plane are dropped and the surface of the kept cells is drawn, so
@@ -30,12 +35,12 @@ pub(crate) mod view;
 
 use tiny_skia::Pixmap;
 
-use super::{basis_table, bounding_box, pieces, validate, ColourMap, Frame, RenderError, Style};
-use crate::mesh::element::order::HEX_CORNERS;
+use super::{bounding_box, pieces, validate, ColourMap, Frame, RenderError, Style};
+use crate::mesh::element::Shape;
 use crate::mesh::CurvedMesh;
+use crate::numeric::{add, dot, scale, sub};
 use raster::{distance_to_segment, edge_blend, Canvas, EdgeStyle};
-use surface::{surface_faces, HEX_FACES};
-use crate::numeric::{add, cross3 as cross, dot, scale, sub};
+use surface::{surface_patches, Corners, Grid, Patch};
 use view::{shade_colour, View};
 
 /// Each pixel is rasterised as `SUPERSAMPLE × SUPERSAMPLE` samples: 3 gives
@@ -47,9 +52,10 @@ const SUPERSAMPLE: u32 = 3;
 /// a 900-pixel-wide image; it scales with the image like the 2D boundary.
 const OUTLINE_PX: f64 = 1.3;
 
-/// Sub-quads per face side and per unit of order (for `p > 1`): a
-/// degree-`p` face needs a few flat pieces per polynomial degree to look
-/// smooth both in outline and in shading.
+/// Pieces (sub-quads, or sub-triangles of a tet face) per face side and
+/// per unit of order (for `p > 1`): a degree-`p` face needs a few flat
+/// pieces per polynomial degree to look smooth both in outline and in
+/// shading.
 const SUBQUADS_PER_ORDER: usize = 3;
 
 /// Where the camera looks from. It always looks at the centre of the
@@ -82,7 +88,8 @@ impl Default for Camera {
 }
 
 /// A plane that cuts the mesh open: cells whose centre (the mean of their
-/// eight corners) lies on the side the normal points to are not drawn.
+/// corners, eight of a hex, four of a tet) lies on the side the normal
+/// points to are not drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClipPlane {
     /// Any point on the plane.
@@ -143,16 +150,19 @@ impl Default for RenderOptions3 {
     }
 }
 
-/// Draws the boundary surface of the hex mesh `mesh` (any order; a linear
+/// Draws the boundary surface of the 3D mesh `mesh` of hexahedra (tensor
+/// order) or tetrahedra (simplex lattice order), of any order (a linear
 /// [`HexMesh`] is `CurvedMesh::from_hexes`), of the cells kept by the clip
 /// plane if any, as shaded faces coloured by `cell_values` of their cell,
 /// with each face's border drawn along its edges (if `opts.draw_edges`),
 /// plus silhouette, colour bar and title. A face is on the surface when no
-/// other kept cell has a face with the same four corner nodes; the mesh's
-/// tagged `boundary` is not used. Without `opts.bounds` the picture frames
-/// the sampled surface.
+/// other kept cell has a face with the same corner nodes (four of a quad,
+/// three of a triangle); the mesh's tagged `boundary` is not used. Without
+/// `opts.bounds` the picture frames the sampled surface.
 ///
-/// Fails, never panics, on the inputs listed in [`crate::render`].
+/// Fails, never panics, on the inputs listed in [`crate::render`], and on
+/// cells of another shape (prisms, pyramids) with
+/// [`RenderError::InvalidCurvedMesh`].
 ///
 /// [`HexMesh`]: crate::mesh::HexMesh
 pub fn render_hexes(
@@ -167,21 +177,12 @@ pub fn render_hexes(
     Ok(pixmap)
 }
 
-/// One drawn face: the face sampled on an `(m+1) × (m+1)` grid.
-struct Patch {
-    /// The cell it belongs to (whose value colours it).
-    cell: usize,
-    /// World points, index `k + (m+1) l` for face parameters
-    /// `(k/m, l/m)`; the grid's border is the face's border.
-    points: Vec<[f64; 3]>,
-}
-
-/// Everything decided before drawing a hex mesh.
+/// Everything decided before drawing a 3D mesh.
 struct HexPlan {
     frame: Frame,
     view: View,
-    /// Sub-quads per face side.
-    m: usize,
+    /// The sample grid of every face.
+    grid: Grid,
     /// The surface of the kept cells.
     patches: Vec<Patch>,
 }
@@ -193,12 +194,17 @@ impl HexPlan {
         opts: &RenderOptions3,
     ) -> Result<HexPlan, RenderError> {
         validate(mesh, values)?;
+        if !matches!(mesh.shape, Shape::Hexahedron | Shape::Tetrahedron) {
+            let reason = format!("cells of shape {:?} are not drawn in 3D", mesh.shape);
+            return Err(RenderError::InvalidCurvedMesh { reason });
+        }
         if let Some(clip) = &opts.clip {
             validate_clip(clip)?;
         }
-        let m = pieces(mesh.p, SUBQUADS_PER_ORDER);
-        let kept = kept_cells(mesh, opts.clip.as_ref());
-        let patches = surface_patches(mesh, &kept, m);
+        let grid = Grid::new(mesh.shape, pieces(mesh.p, SUBQUADS_PER_ORDER));
+        let corners = Corners::of(mesh);
+        let kept = kept_cells(mesh, &corners, opts.clip.as_ref());
+        let patches = surface_patches(mesh, &corners, &kept, grid);
         let framed: Vec<[f64; 3]> = match opts.bounds {
             Some((lo, hi)) => box_corners(lo, hi).to_vec(),
             // The sampled surface, not the nodes: a curved face may bulge
@@ -221,7 +227,7 @@ impl HexPlan {
         Ok(HexPlan {
             frame,
             view,
-            m,
+            grid,
             patches,
         })
     }
@@ -278,114 +284,45 @@ fn screen_bounds(view: &View, points: &[[f64; 3]]) -> ([f64; 2], [f64; 2]) {
 }
 
 /// Which cells are drawn: all, or those whose centre (the mean of the
-/// eight corner nodes, whatever the order, so a curved mesh and its
+/// corner nodes, whatever the order, so a curved mesh and its
 /// straight-sided version lose the same cells) is not on the positive side
 /// of the clip plane; a cell cut by the plane is kept or dropped whole.
-fn kept_cells(mesh: &CurvedMesh<3>, clip: Option<&ClipPlane>) -> Vec<bool> {
+fn kept_cells(mesh: &CurvedMesh<3>, corners: &Corners, clip: Option<&ClipPlane>) -> Vec<bool> {
     let Some(clip) = clip else {
         return vec![true; mesh.cells.len()];
     };
-    mesh.cells
-        .iter()
-        .map(|cell| {
-            let corners = corner_nodes(cell, mesh.p);
-            let c = corners.iter().fold([0.0; 3], |c, &n| {
-                add(c, scale(0.125, mesh.nodes[n]))
-            });
-            dot(sub(c, clip.point), clip.normal) <= 0.0
-        })
-        .collect()
-}
-
-/// The eight corner nodes of a tensor-ordered order-`p` hex, in the local
-/// numbering of [`HEX_CORNERS`].
-fn corner_nodes(cell: &[usize], p: usize) -> [usize; 8] {
-    let q = p + 1;
-    HEX_CORNERS.map(|[a, b, c]| cell[p * (a + q * b + q * q * c)])
-}
-
-/// The sampled boundary faces of the kept cells: faces found by their
-/// corner nodes (shared by no other kept cell), in cell order.
-fn surface_patches(mesh: &CurvedMesh<3>, kept: &[bool], m: usize) -> Vec<Patch> {
-    let corners: Vec<[usize; 8]> = mesh.cells.iter().map(|c| corner_nodes(c, mesh.p)).collect();
-    let table = basis_table(mesh.p, mesh.spacing, m);
-    surface_faces(&corners, kept)
-        .into_iter()
-        .filter_map(|face| {
-            // Which of the cell's six faces it is: the one whose corners
-            // are listed exactly like this.
-            let cell = &corners[face.cell];
-            let f = HEX_FACES
+    // 1/8 and 1/4 are exact, so a hex's mean is the plain sum of eighths.
+    let w = 1.0 / corners.per_cell as f64;
+    (0..mesh.cells.len())
+        .map(|c| {
+            let centre = corners
+                .cell(c)
                 .iter()
-                .position(|l| l.map(|i| cell[i]) == face.nodes)?;
-            let points = sample_face(&mesh.cells[face.cell], &mesh.nodes, mesh.p, f, &table);
-            Some(Patch {
-                cell: face.cell,
-                points,
-            })
+                .fold([0.0; 3], |x, &n| add(x, scale(w, mesh.nodes[n])));
+            dot(sub(centre, clip.point), clip.normal) <= 0.0
         })
         .collect()
 }
 
-/// Face `f` ([`HEX_FACES`] numbering) of the order-`p` hex with tensor-
-/// ordered nodes `cell`, sampled through the hex map on the grid of
-/// `table` (rows at `t = k / m`). The face's first corner is the grid's
-/// origin, its second lies along the grid's first axis, its fourth along
-/// the second.
-fn sample_face(
-    cell: &[usize],
-    nodes: &[[f64; 3]],
-    p: usize,
-    f: usize,
-    table: &[Vec<f64>],
-) -> Vec<[f64; 3]> {
-    let m = table.len() - 1;
-    let q = p + 1;
-    let [r0, r1, _, r3] = HEX_FACES[f].map(|i| HEX_CORNERS[i]);
-    let axis_u = (0..3)
-        .find(|&d| r1[d] != r0[d])
-        .expect("face corners differ");
-    let axis_v = (0..3)
-        .find(|&d| r3[d] != r0[d])
-        .expect("face corners differ");
-    let fixed = 3 - axis_u - axis_v;
-    // The face lies where the basis along the fixed axis is exactly the
-    // first or the last function: the face depends on its own nodes only.
-    let mut delta = vec![0.0; q];
-    delta[r0[fixed] * p] = 1.0;
-    // Along a reversed axis, face parameter k/m is reference 1 − k/m.
-    let row = |k: usize, reversed: bool| &table[if reversed { m - k } else { k }];
-    let mut points = Vec::with_capacity((m + 1) * (m + 1));
-    for l in 0..=m {
-        for k in 0..=m {
-            let mut w: [&[f64]; 3] = [&delta, &delta, &delta];
-            w[axis_u] = row(k, r0[axis_u] == 1);
-            w[axis_v] = row(l, r0[axis_v] == 1);
-            let mut x = [0.0; 3];
-            for (c, &wc) in w[2].iter().enumerate().filter(|(_, w)| **w != 0.0) {
-                for (b, &wb) in w[1].iter().enumerate().filter(|(_, w)| **w != 0.0) {
-                    for (a, &wa) in w[0].iter().enumerate().filter(|(_, w)| **w != 0.0) {
-                        let y = nodes[cell[a + q * b + q * q * c]];
-                        x = add(x, scale(wa * wb * wc, y));
-                    }
-                }
-            }
-            points.push(x);
-        }
-    }
-    points
+/// A face ready to rasterise: its grid points on the canvas (samples, x
+/// right, y down, depth key), its border segments there and its colour.
+struct Projected<'a> {
+    patch: &'a Patch,
+    px: Vec<[f64; 3]>,
+    border: Vec<[[f64; 3]; 2]>,
+    base: [u8; 3],
 }
 
 /// Rasterises the surface into a supersampled z-buffer over the plot
 /// region and copies the averaged result into `pixmap`.
 fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges: bool) {
-    let layout = &plan.frame.layout;
-    let region = layout.plot_region();
+    let region = plan.frame.layout.plot_region();
     let ss = SUPERSAMPLE as f64;
     let mut canvas = Canvas::new(region[2] * SUPERSAMPLE, region[3] * SUPERSAMPLE);
     let edges = if draw_edges { edge_style(plan) } else { None };
-    let m = plan.m;
-    let at = |k: usize, l: usize| k + (m + 1) * l;
+    // The same for every face: computed once.
+    let (pieces, border) = (plan.grid.pieces(), plan.grid.border());
+    let per_piece = plan.grid.piece_corners();
     for patch in &plan.patches {
         // A face with a point behind the eye is skipped rather than
         // clipped: only possible when a given box cuts through the mesh.
@@ -404,82 +341,77 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
         else {
             continue;
         };
-        let normals = grid_normals(&patch.points, m);
-        let border: Vec<_> = face_border(m).map(|[a, b]| [px[a], px[b]]).collect();
-        let base = plan.frame.colour(values[patch.cell]);
-        for l in 0..m {
-            for k in 0..m {
-                let ids = [at(k, l), at(k + 1, l), at(k + 1, l + 1), at(k, l + 1)];
-                let light = sub_quad_light(plan, &patch.points, &normals, ids);
-                let quad = ids.map(|i| px[i]);
-                let near =
-                    edges.map(|style| nearby_segments(&border, &quad, style.half_width + 1.0));
-                for t in [[0, 1, 2], [0, 2, 3]] {
-                    let tri = t.map(|v| quad[v]);
-                    let lit = t.map(|v| light[v]);
-                    let paint = |x: f64, y: f64| {
-                        let colour = shade_colour(base, interpolate(&tri, lit, x, y));
-                        match (edges, &near) {
-                            (Some(style), Some(segs)) if !segs.is_empty() => {
-                                let d = segs
-                                    .iter()
-                                    .map(|[a, b]| distance_to_segment(*a, *b, x, y))
-                                    .fold(f64::INFINITY, f64::min);
-                                edge_blend(colour, style, d)
-                            }
-                            _ => colour,
-                        }
-                    };
-                    canvas.fill_triangle(tri, &paint);
-                }
-            }
+        let face = Projected {
+            patch,
+            border: border.iter().map(|&[a, b]| [px[a], px[b]]).collect(),
+            px,
+            base: plan.frame.colour(values[patch.cell]),
+        };
+        for ids in pieces.chunks_exact(per_piece) {
+            draw_piece(&mut canvas, plan, &face, ids, edges);
         }
     }
-    let outline = (OUTLINE_PX * layout.res() as f64 * ss).round() as usize;
+    let outline = (OUTLINE_PX * plan.frame.layout.res() as f64 * ss).round() as usize;
     canvas.outline(outline.max(1), raster::INK, 0.9);
     canvas.blit(pixmap, region[0], region[1], SUPERSAMPLE);
 }
 
-/// Unit normals of the sampled face at its grid points, from central
-/// differences (one-sided on the border), all on the same side of the
-/// face. Shading with these, interpolated over each sub-quad, makes a
-/// curved face look smooth where flat sub-quads would show as facets.
-fn grid_normals(points: &[[f64; 3]], m: usize) -> Vec<[f64; 3]> {
-    let at = |k: usize, l: usize| points[k + (m + 1) * l];
-    let mut normals = Vec::with_capacity(points.len());
-    for l in 0..=m {
-        for k in 0..=m {
-            let du = sub(at((k + 1).min(m), l), at(k.saturating_sub(1), l));
-            let dv = sub(at(k, (l + 1).min(m)), at(k, l.saturating_sub(1)));
-            normals.push(view::normalise(cross(du, dv)));
-        }
+/// Rasterises the piece of `face` with grid corners `ids` (3 or 4) as the
+/// fan of triangles from its first corner, shaded and with the face's
+/// border darkened where it passes.
+fn draw_piece(
+    canvas: &mut Canvas,
+    plan: &HexPlan,
+    face: &Projected,
+    ids: &[usize],
+    edges: Option<EdgeStyle>,
+) {
+    let n = ids.len();
+    let light = piece_light(plan, face.patch, ids);
+    let corners: [[f64; 3]; 4] = std::array::from_fn(|i| face.px[ids[i.min(n - 1)]]);
+    let near =
+        edges.map(|style| nearby_segments(&face.border, &corners[..n], style.half_width + 1.0));
+    for t in 1..n - 1 {
+        let tri = [corners[0], corners[t], corners[t + 1]];
+        let lit = [light[0], light[t], light[t + 1]];
+        let paint = |x: f64, y: f64| {
+            let colour = shade_colour(face.base, interpolate(&tri, lit, x, y));
+            match (edges, &near) {
+                (Some(style), Some(segs)) if !segs.is_empty() => {
+                    let d = segs
+                        .iter()
+                        .map(|[a, b]| distance_to_segment(*a, *b, x, y))
+                        .fold(f64::INFINITY, f64::min);
+                    edge_blend(colour, style, d)
+                }
+                _ => colour,
+            }
+        };
+        canvas.fill_triangle(tri, &paint);
     }
-    normals
 }
 
-/// The light factor at the four corners `ids` of a sub-quad: its corner
-/// normals, turned towards the viewer together when the sub-quad faces
-/// away (two-sided lighting), so faces of inverted cells and inner faces
-/// exposed by clipping are lit like any other.
-fn sub_quad_light(
-    plan: &HexPlan,
-    points: &[[f64; 3]],
-    normals: &[[f64; 3]],
-    ids: [usize; 4],
-) -> [f64; 4] {
-    let world = ids.map(|i| points[i]);
-    let centre = scale(0.25, add(add(world[0], world[1]), add(world[2], world[3])));
-    let away = dot(view::quad_normal(&world), plan.view.to_eye(centre)) < 0.0;
-    // Corner normals point to the same side as the sub-quad's own normal
-    // (both follow the grid's orientation), so one flip serves all four.
-    ids.map(|i| {
-        let n = if away {
-            scale(-1.0, normals[i])
-        } else {
-            normals[i]
-        };
-        plan.view.light_factor(n)
-    })
+/// The light factor at the corners `ids` (3 or 4; unused entries 0) of a
+/// piece: its corner normals, turned towards the viewer together when the
+/// piece faces away (two-sided lighting), so faces of inverted cells and
+/// inner faces exposed by clipping are lit like any other.
+fn piece_light(plan: &HexPlan, patch: &Patch, ids: &[usize]) -> [f64; 4] {
+    let world: [[f64; 3]; 4] = std::array::from_fn(|i| patch.points[ids[i.min(ids.len() - 1)]]);
+    let world = &world[..ids.len()];
+    let away = dot(
+        view::polygon_normal(world),
+        plan.view.to_eye(view::centroid(world)),
+    ) < 0.0;
+    // Corner normals point to the same side as the piece's own normal
+    // (both follow the grid's orientation), so one flip serves all.
+    let mut light = [0.0; 4];
+    for (l, &i) in light.iter_mut().zip(ids) {
+        let n = patch.normals[i];
+        *l = plan
+            .view
+            .light_factor(if away { scale(-1.0, n) } else { n });
+    }
+    light
 }
 
 /// The value at (x, y) of the linear function on triangle `tri` (screen
@@ -505,31 +437,13 @@ fn interpolate(tri: &[[f64; 3]; 3], values: [f64; 3], x: f64, y: f64) -> f64 {
     (w[0] * values[0] + w[1] * values[1] + w[2] * values[2]).clamp(lo, hi)
 }
 
-/// The grid-index pairs of the segments around the border of an
-/// `m × m` patch.
-fn face_border(m: usize) -> impl Iterator<Item = [usize; 2]> {
-    let at = move |k: usize, l: usize| k + (m + 1) * l;
-    (0..m).flat_map(move |i| {
-        [
-            [at(i, 0), at(i + 1, 0)],
-            [at(m, i), at(m, i + 1)],
-            [at(i, m), at(i + 1, m)],
-            [at(0, i), at(0, i + 1)],
-        ]
-    })
-}
-
 /// The border segments that come within `reach` samples of the bounding
-/// box of `quad`: the only ones that can darken its samples. Taken from the
-/// whole border, not just the quad's own sides, because small faces have
-/// sub-quads narrower than the edge line.
-fn nearby_segments(
-    border: &[[[f64; 3]; 2]],
-    quad: &[[f64; 3]; 4],
-    reach: f64,
-) -> Vec<[[f64; 3]; 2]> {
-    let lo = |k: usize| quad.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min) - reach;
-    let hi = |k: usize| quad.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max) + reach;
+/// box of `piece`: the only ones that can darken its samples. Taken from
+/// the whole border, not just the piece's own sides, because small faces
+/// have pieces narrower than the edge line.
+fn nearby_segments(border: &[[[f64; 3]; 2]], piece: &[[f64; 3]], reach: f64) -> Vec<[[f64; 3]; 2]> {
+    let lo = |k: usize| piece.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min) - reach;
+    let hi = |k: usize| piece.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max) + reach;
     let (x0, x1, y0, y1) = (lo(0), hi(0), lo(1), hi(1));
     border
         .iter()
@@ -544,16 +458,15 @@ fn nearby_segments(
 }
 
 /// The style of the face borders, like the 2D cell edges: from the median
-/// face size in pixels (its corners' world size times the scale, which
-/// does not vanish for faces seen edge-on, as projected areas would in
-/// axis views).
+/// face size in pixels (the square root of the area of its corners'
+/// polygon in the world, as in 2D, times the scale, which does not vanish
+/// for faces seen edge-on, as projected areas would in axis views).
 fn edge_style(plan: &HexPlan) -> Option<EdgeStyle> {
-    let m = plan.m;
-    let corners = [0, m, (m + 1) * (m + 1) - 1, (m + 1) * m];
-    let sizes = plan
-        .patches
-        .iter()
-        .map(|f| view::quad_area(&corners.map(|i| f.points[i])).sqrt());
+    let corners = plan.grid.corners();
+    let sizes = plan.patches.iter().map(|f| {
+        let polygon: Vec<[f64; 3]> = corners.iter().map(|&i| f.points[i]).collect();
+        view::polygon_area(&polygon).sqrt()
+    });
     let (width, alpha) = plan.frame.edge_style(sizes.collect()).1?;
     Some(EdgeStyle {
         half_width: 0.5 * width as f64 * SUPERSAMPLE as f64,

@@ -653,12 +653,18 @@ fn a_bound_group_that_no_element_carries_is_an_error() {
 }
 
 #[test]
-fn triangles_are_refused_with_the_gmsh_recipe() {
+fn triangles_are_read_and_prisms_refused_naming_the_block() {
     let dir = TempDir::new().unwrap();
     let tri = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
     std::fs::write(dir.path().join("tri.msh"), tri).unwrap();
     let ran = deformesh(dir.path(), &["quality", "tri.msh"]);
-    assert_clean_failure(&ran, dir.path(), &["tri.msh", "element type 2", "not supported yet", "Mesh.RecombineAll = 1;", "Mesh.SubdivisionAlgorithm"], &["tri.msh"]);
+    // the reference triangle itself: det J 1, corners of 90°, 45°, 45°:
+    // min sine sin 45° over sin 60° = 0.8165
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+    assert!(ran.stdout.contains("cells 1  nodes 3") && ran.stdout.contains("min 1.000000e0  max 1.000000e0") && ran.stdout.contains("min 0.8165"), "{}", ran.stdout);
+    std::fs::write(dir.path().join("prism.msh"), tri.replace("2 1 2 1", "2 1 6 1")).unwrap();
+    let ran = deformesh(dir.path(), &["quality", "prism.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["prism.msh", "line 16", "element type 6", "Prisms and pyramids are not curved yet"], &["prism.msh", "tri.msh"]);
 }
 
 #[test]

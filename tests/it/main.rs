@@ -20,4 +20,6 @@ mod msh22;
 mod real_programs;
 mod real_programs_hex;
 mod real_programs_highorder;
+mod simplex_orders;
+mod simplices;
 mod solver_failure;

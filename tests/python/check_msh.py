@@ -8,7 +8,8 @@ Prints one JSON object:
   element_types    {type number: {"name": ..., "count": ...}} over all dims
   physical_names   {dim: [names, in order of physical tag]}
   elements_2d      {"tags": [...], "minDetJac": [...], "maxDetJac": [...],
-                    "minSJ": [...], "sampledSJ": [...]}, ordered by element
+                    "minSJ": [...], "minSIGE": [...], "sampledSJ": [...]},
+                   ordered by element
                    tag; minSJ is Gmsh's lower bound, sampledSJ the least
                    det J / (|dx/du| |dx/dv| (|dx/dw|)) of Gmsh's own
                    Jacobians on the (3p + 1)^dim equispaced points of the
@@ -45,7 +46,7 @@ def elements(dim):
     _, tags, _ = gmsh.model.mesh.getElements(dim=dim)
     all_tags = sorted(int(t) for ts in tags for t in ts)
     out = {"tags": all_tags}
-    for quality in ("minDetJac", "maxDetJac", "minSJ"):
+    for quality in ("minDetJac", "maxDetJac", "minSJ", "minSIGE"):
         values = gmsh.model.mesh.getElementQualities(all_tags, quality) if all_tags else []
         out[quality] = [float(v) for v in values]
     out["sampledSJ"] = sampled_sj(dim, all_tags)

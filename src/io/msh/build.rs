@@ -15,7 +15,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, HexMesh, PlaneMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, PlaneMesh, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -114,16 +114,17 @@ impl Raw {
         Ok(())
     }
 
-    /// The linear hex mesh and its cells' element tags.
-    pub fn hex_mesh(&self) -> Result<(HexMesh, Vec<u64>), MshError> {
+    /// The linear hex mesh (`N = 8`, faces `K = 4`) or tetrahedral mesh
+    /// (`N = 4`, `K = 3`) and its cells' element tags.
+    pub fn solid_mesh<const N: usize, const K: usize>(&self) -> Result<(SolidMesh<N, K>, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
-        self.one_shape(3, Shape::Hexahedron)?;
+        self.one_shape(3, if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron })?;
         let cells = self.by_tag(3);
         let (part_names, faces) = self.boundary(2);
-        let mesh = HexMesh {
+        let mesh = SolidMesh {
             nodes: self.nodes.clone(),
-            cells: cells.iter().map(|c| c.2.try_into().expect("8-node hexes")).collect(),
-            faces: faces.iter().map(|&(nodes, part, _)| BoundaryFace { nodes: nodes.try_into().expect("4-node quads"), part }).collect(),
+            cells: cells.iter().map(|c| c.2.try_into().expect("one shape of N nodes")).collect(),
+            faces: faces.iter().map(|&(nodes, part, _)| BoundaryFace { nodes: nodes.try_into().expect("the cells' face shape"), part }).collect(),
             part_names,
         };
         Ok((mesh, cells.iter().map(|c| c.0).collect()))

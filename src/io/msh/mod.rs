@@ -30,7 +30,7 @@ pub use v22::layout_text_22;
 pub use write::{hex_msh_string, layout_text, msh_string, msh_type, write_hex_msh, write_msh};
 
 use crate::mesh::element::Shape;
-use crate::mesh::{CurvedMesh, HexMesh, QuadMesh, TriMesh};
+use crate::mesh::{CurvedMesh, HexMesh, QuadMesh, TetMesh, TriMesh};
 use read::Accept;
 
 pub use crate::io::layout::DOMAIN_NAME;
@@ -269,9 +269,7 @@ fn recombine_hint(element_type: i64) -> String {
     }
     match element_type {
         20 | 22 | 24 | 25 => ". Serendipity and incomplete triangles are not read: give `curve` the linear mesh (type 2)".into(),
-        4 | 11 | 29..=33 | 6 | 13 | 18 | 7 | 14 | 19 => {
-            ". Tetrahedra, prisms and pyramids are not curved yet: deformesh curves triangle and quad meshes in 2D and hex meshes in 3D".into()
-        }
+        6 | 13 | 18 | 7 | 14 | 19 => ". Prisms and pyramids are not curved yet: deformesh curves triangle and quad meshes in 2D, tetrahedral and hex meshes in 3D".into(),
         _ => String::new(),
     }
 }
@@ -322,7 +320,7 @@ pub fn parse_hex_msh(bytes: impl AsRef<[u8]>) -> Result<HexMesh, MshError> {
 
 /// [`parse_hex_msh`], with the element tag of every cell in the file.
 pub fn parse_hex_msh_tagged(bytes: impl AsRef<[u8]>) -> Result<(HexMesh, Vec<u64>), MshError> {
-    read::parse(bytes.as_ref(), LINEAR[1])?.hex_mesh()
+    read::parse(bytes.as_ref(), LINEAR[1])?.solid_mesh()
 }
 
 impl<const D: usize> CurvedMesh<D> {
@@ -355,6 +353,8 @@ pub enum AnyMesh {
     Triangles(TriMesh),
     /// Linear hexes.
     Hexes(HexMesh),
+    /// Linear tetrahedra.
+    Tetrahedra(TetMesh),
     /// Quads or triangles of order 2..=4.
     Curved2(CurvedMesh<2>),
     /// Hexes or tetrahedra of order 2..=4.
@@ -381,11 +381,12 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
     let raw = read::parse(bytes, if linear_only { LINEAR[1] } else { CURVED[1] })?;
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
-    if top == 3 && raw.cell_shape(3) != Some(Shape::Hexahedron) {
-        return Err(raw.refused(3, "3D meshes of hexahedra; tetrahedral, prism and pyramid meshes are not curved yet (triangle meshes are)"));
+    if top == 3 && !matches!(raw.cell_shape(3), Some(Shape::Hexahedron | Shape::Tetrahedron)) {
+        return Err(raw.refused(3, "3D meshes of hexahedra or tetrahedra; prism and pyramid meshes are not curved yet"));
     }
     let (mesh, cell_tags) = match (top, order) {
-        (3, 1) => raw.hex_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
+        (3, 1) if raw.cell_shape(3) == Some(Shape::Tetrahedron) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Tetrahedra(m), t))?,
+        (3, 1) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
         (_, 1) if raw.cell_shape(2) == Some(Shape::Triangle) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Triangles(m), t))?,
         (_, 1) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,

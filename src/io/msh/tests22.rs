@@ -151,7 +151,7 @@ fn refuses_one_tag_on_two_elements() {
 fn reader_errors_name_the_line() {
     let cases: [(&str, &str, &str, &str); 8] = [
         ("8 3 2 3 1 2 3 6 5", "8 3 2 3 1 2 3 77 5", "8 3 2 3 1 2 3 77", "element 8 refers to unknown node tag 77"),
-        ("8 3 2 3 1 2 3 6 5", "8 2 2 3 1 2 3 6", "8 2 2", "unsupported element type 2"),
+        ("8 3 2 3 1 2 3 6 5", "8 2 2 3 1 2 3 6", "8 2 2", "element block of Triangles in a mesh whose cells are Quadrilaterals"),
         ("5 1 1 0\n", "5 nan 1 0\n", "5 nan", "node 5 has a non-finite coordinate `nan`"),
         ("6 2 1 0\n", "5 2 1 0\n", "5 2 1 0", "node tag 5 is defined twice"),
         ("6 2 1 0\n", "6 2 1 0.5\n", "6 2 1 0.5", "node 6 has z = 0.5"),
@@ -166,7 +166,7 @@ fn reader_errors_name_the_line() {
         let line = line_of(&text, at);
         assert!(msg.starts_with(&format!("line {line}: ")) && msg.contains(words), "{to:?}: expected line {line} and {words:?}: {msg}");
     }
-    assert!(error_of(&SQUARES.replacen("8 3 2 3 1 2 3 6 5", "8 2 2 3 1 2 3 6", 1)).contains("Triangles, tetrahedra"));
+    assert!(error_of(&SQUARES.replacen("8 3 2 3 1 2 3 6 5", "8 2 2 3 1 2 3 6", 1)).contains("mixed meshes are next"));
     // truncated in an element: at the last line
     let cut = &SQUARES[..SQUARES.find("8 3 2 3 1 2 3").unwrap() + 12];
     assert_eq!(error_of(cut), format!("line {}: file truncated: expected a node tag of an element", cut.lines().count()));

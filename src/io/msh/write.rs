@@ -12,7 +12,7 @@ use crate::io::layout::Layout;
 use crate::mesh::element::Shape;
 use crate::mesh::element::{to_format, Spacing};
 use crate::mesh::file::write_atomic;
-use crate::mesh::{CurvedMesh, HexMesh, PlaneMesh};
+use crate::mesh::{CurvedMesh, PlaneMesh, SolidMesh};
 
 /// The quad or triangle mesh as MSH 4.1 ASCII text. The mesh is assumed
 /// valid; [`write_msh`] checks that first. Coordinates are printed with
@@ -28,13 +28,13 @@ pub fn write_msh<const N: usize>(path: &Path, mesh: &PlaneMesh<N>) -> Result<(),
 
 /// The hex mesh as MSH 4.1 ASCII text: boundary faces as 4-node quads
 /// (type 3), hexes (type 5). Assumed valid, as [`msh_string`].
-pub fn hex_msh_string(mesh: &HexMesh) -> String {
+pub fn hex_msh_string<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>) -> String {
     msh_text(&CurvedMesh::from_hexes(mesh))
 }
 
 /// Checks `mesh` and writes it atomically to `path` as MSH 4.1 ASCII;
 /// nothing is written if it fails [`CurvedMesh::validate`].
-pub fn write_hex_msh(path: &Path, mesh: &HexMesh) -> Result<(), MshError> {
+pub fn write_hex_msh<const N: usize, const K: usize>(path: &Path, mesh: &SolidMesh<N, K>) -> Result<(), MshError> {
     CurvedMesh::from_hexes(mesh).write_msh(path)
 }
 

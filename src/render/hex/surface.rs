@@ -1,28 +1,227 @@
-//! The surface to draw: faces of kept cells that no other kept cell shares.
+//! The surface to draw: faces of kept cells that no other kept cell shares,
+//! each sampled on a grid of points with their normals.
+//!
+//! A hex face is sampled through the hex map on a quad grid, a tet face
+//! through its own Lagrange triangle on a triangle grid; everything after
+//! sampling (lighting, rasterising, edge lines) sees only the [`Grid`]
+//! and the points, whatever the cell.
 
+use crate::mesh::element::order::HEX_CORNERS;
+use crate::mesh::element::simplex::{self, face_nodes, lattice, lattice_index};
+use crate::mesh::element::Shape;
+use crate::mesh::CurvedMesh;
+use crate::numeric::{add, cross3 as cross, scale, sub};
+use crate::render::basis_table;
+
+use super::view::normalise;
+
+/// The hex faces in local corner numbers. Not [`Shape::faces`] (Gmsh's
+/// order and starting corners): the start corner decides how each sub-quad
+/// is split into triangles, and the face order which face wins a tie in
+/// depth, so this table keeps the hex pictures as they were.
 pub(crate) use crate::mesh::HEX_FACES;
 
-/// One quad of the drawn surface.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct SurfaceFace {
-    /// The four nodes, in the order of the owning cell's face.
-    pub nodes: [usize; 4],
-    /// The kept cell the face belongs to (whose value colours it).
-    pub cell: usize,
+/// The points at which a face is sampled, `m` pieces per side, and how
+/// they are joined into flat pieces. Points are numbered by their grid
+/// position `(k, l)` (face parameters `(k/m, l/m)`), `k` fastest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Grid {
+    /// `(m+1)²` points, `k, l ≤ m`, joined into `m²` sub-quads.
+    Quad(usize),
+    /// The order-`m` triangle lattice, `k + l ≤ m` (in its lattice order),
+    /// joined into `m²` sub-triangles.
+    Tri(usize),
 }
 
-/// The faces of kept cells (`kept[c]`) not shared with another kept cell:
-/// the original boundary of the kept cells plus the faces exposed where a
-/// neighbour was dropped. Faces come in cell order, so the picture does not
-/// depend on the sorting.
-pub(crate) fn surface_faces(cells: &[[usize; 8]], kept: &[bool]) -> Vec<SurfaceFace> {
+impl Grid {
+    /// The grid of the faces of `shape` cells (hexahedron or tetrahedron).
+    pub fn new(shape: Shape, m: usize) -> Grid {
+        match shape {
+            Shape::Tetrahedron => Grid::Tri(m),
+            _ => Grid::Quad(m),
+        }
+    }
+
+    /// Pieces per side.
+    pub fn m(self) -> usize {
+        match self {
+            Grid::Quad(m) | Grid::Tri(m) => m,
+        }
+    }
+
+    /// The index of grid position `(k, l)`.
+    pub fn at(self, k: usize, l: usize) -> usize {
+        match self {
+            Grid::Quad(m) => k + (m + 1) * l,
+            Grid::Tri(m) => lattice_index(Shape::Triangle, m, [k, l, 0]),
+        }
+    }
+
+    /// The face parameters of the points, in index order.
+    fn params(self) -> Vec<[usize; 2]> {
+        match self {
+            Grid::Quad(m) => (0..=m).flat_map(|l| (0..=m).map(move |k| [k, l])).collect(),
+            Grid::Tri(m) => lattice(Shape::Triangle, m)
+                .into_iter()
+                .map(|[k, l, _]| [k, l])
+                .collect(),
+        }
+    }
+
+    /// Corners per piece: 4 or 3.
+    pub fn piece_corners(self) -> usize {
+        match self {
+            Grid::Quad(_) => 4,
+            Grid::Tri(_) => 3,
+        }
+    }
+
+    /// The pieces' corner indices, [`Grid::piece_corners`] a piece, each
+    /// counter-clockwise in the face parameters (so all pieces face the
+    /// same side as the face). A piece is drawn as the fan of triangles
+    /// from its first corner.
+    pub fn pieces(self) -> Vec<usize> {
+        let at = |k, l| self.at(k, l);
+        match self {
+            Grid::Quad(m) => (0..m)
+                .flat_map(|l| {
+                    (0..m)
+                        .flat_map(move |k| [at(k, l), at(k + 1, l), at(k + 1, l + 1), at(k, l + 1)])
+                })
+                .collect(),
+            // Lattice positions of order m are our point indices.
+            Grid::Tri(m) => simplex::sub_simplices(Shape::Triangle, m)
+                .into_iter()
+                .flat_map(|s| [s[0], s[1], s[2]])
+                .collect(),
+        }
+    }
+
+    /// The index pairs of the segments around the border: the face's
+    /// edges.
+    pub fn border(self) -> Vec<[usize; 2]> {
+        let at = |k, l| self.at(k, l);
+        let m = self.m();
+        (0..m)
+            .flat_map(|i| match self {
+                Grid::Quad(_) => vec![
+                    [at(i, 0), at(i + 1, 0)],
+                    [at(m, i), at(m, i + 1)],
+                    [at(i, m), at(i + 1, m)],
+                    [at(0, i), at(0, i + 1)],
+                ],
+                Grid::Tri(_) => vec![
+                    [at(i, 0), at(i + 1, 0)],
+                    [at(m - i, i), at(m - i - 1, i + 1)],
+                    [at(0, i), at(0, i + 1)],
+                ],
+            })
+            .collect()
+    }
+
+    /// The indices of the face's corners, in order around it.
+    pub fn corners(self) -> Vec<usize> {
+        let m = self.m();
+        match self {
+            Grid::Quad(_) => vec![self.at(0, 0), self.at(m, 0), self.at(m, m), self.at(0, m)],
+            Grid::Tri(_) => vec![self.at(0, 0), self.at(m, 0), self.at(0, m)],
+        }
+    }
+}
+
+/// The corner nodes of every cell: `per_cell` a cell (8 of a hex, 4 of a
+/// tet), in the numbering of the shape's vertices (which the face tables
+/// use).
+pub(crate) struct Corners {
+    pub per_cell: usize,
+    pub nodes: Vec<usize>,
+}
+
+impl Corners {
+    /// The corners of the cells of `mesh`, a validated hex (tensor order)
+    /// or tet (lattice order) mesh.
+    pub fn of(mesh: &CurvedMesh<3>) -> Corners {
+        let p = mesh.p;
+        let local: Vec<usize> = match mesh.shape {
+            Shape::Tetrahedron => {
+                let vertices = Shape::Tetrahedron.vertices();
+                vertices
+                    .iter()
+                    .map(|v| lattice_index(mesh.shape, p, v.map(|x| x as usize * p)))
+                    .collect()
+            }
+            _ => {
+                let q = p + 1;
+                HEX_CORNERS
+                    .iter()
+                    .map(|&[a, b, c]| p * (a + q * b + q * q * c))
+                    .collect()
+            }
+        };
+        let nodes = mesh
+            .cells
+            .iter()
+            .flat_map(|cell| local.iter().map(|&i| cell[i]))
+            .collect();
+        Corners {
+            per_cell: local.len(),
+            nodes,
+        }
+    }
+
+    /// The corners of cell `c`.
+    pub fn cell(&self, c: usize) -> &[usize] {
+        &self.nodes[c * self.per_cell..(c + 1) * self.per_cell]
+    }
+
+    fn cells(&self) -> impl Iterator<Item = &[usize]> {
+        self.nodes.chunks_exact(self.per_cell)
+    }
+}
+
+/// The faces of `shape` as loops of local corner numbers, counter-clockwise
+/// seen from outside: [`HEX_FACES`] for hexes, the element table's for
+/// tets (whose loops [`face_nodes`] follows).
+pub(crate) fn face_loops(shape: Shape) -> Vec<&'static [usize]> {
+    match shape {
+        Shape::Tetrahedron => shape.faces().iter().map(|f| f.1).collect(),
+        _ => {
+            let table: &'static [[usize; 4]; 6] = &HEX_FACES;
+            table.iter().map(|f| f.as_slice()).collect()
+        }
+    }
+}
+
+/// One face of the drawn surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SurfaceFace {
+    /// The kept cell the face belongs to (whose value colours it).
+    pub cell: usize,
+    /// Which of the cell's faces, in the numbering of [`face_loops`].
+    pub face: usize,
+}
+
+/// The faces (`loops`, in local corner numbers) of kept cells (`kept[c]`)
+/// not shared with another kept cell: the original boundary of the kept
+/// cells plus the faces exposed where a neighbour was dropped. Faces come
+/// in cell order, so the picture does not depend on the sorting.
+pub(crate) fn surface_faces(
+    corners: &Corners,
+    loops: &[&[usize]],
+    kept: &[bool],
+) -> Vec<SurfaceFace> {
     // Every face of a kept cell, keyed by its sorted nodes, then sorted so
     // that the copies of a face are neighbours.
-    let mut all: Vec<([usize; 4], usize, usize)> = cells
-        .iter()
+    let mut all: Vec<([usize; 4], usize, usize)> = corners
+        .cells()
         .enumerate()
         .filter(|&(c, _)| kept[c])
-        .flat_map(|(c, cell)| (0..6).map(move |f| (key(HEX_FACES[f].map(|i| cell[i])), c, f)))
+        .flat_map(|(c, cell)| {
+            loops
+                .iter()
+                .enumerate()
+                .map(move |(f, l)| (key(l.iter().map(|&i| cell[i])), c, f))
+        })
         .collect();
     all.sort_unstable();
     let mut faces: Vec<(usize, usize)> = all
@@ -33,35 +232,258 @@ pub(crate) fn surface_faces(cells: &[[usize; 8]], kept: &[bool]) -> Vec<SurfaceF
     faces.sort_unstable();
     faces
         .into_iter()
-        .map(|(cell, f)| SurfaceFace {
-            nodes: HEX_FACES[f].map(|i| cells[cell][i]),
-            cell,
+        .map(|(cell, face)| SurfaceFace { cell, face })
+        .collect()
+}
+
+/// The same key for a face whichever corner and direction it starts from:
+/// its sorted nodes, a triangle's padded with `usize::MAX` (which no node
+/// is, so a triangle never matches a quad).
+fn key(nodes: impl Iterator<Item = usize>) -> [usize; 4] {
+    let mut k = [usize::MAX; 4];
+    k.iter_mut().zip(nodes).for_each(|(slot, n)| *slot = n);
+    k.sort_unstable();
+    k
+}
+
+/// One drawn face: the face sampled on the plan's [`Grid`].
+pub(crate) struct Patch {
+    /// The cell it belongs to (whose value colours it).
+    pub cell: usize,
+    /// World points, in grid order; the grid's border is the face's
+    /// border.
+    pub points: Vec<[f64; 3]>,
+    /// Unit normals at the points, on the side the pieces face.
+    pub normals: Vec<[f64; 3]>,
+}
+
+/// The sampled boundary faces of the kept cells of `mesh` (validated, hex
+/// or tet), in cell order.
+pub(crate) fn surface_patches(
+    mesh: &CurvedMesh<3>,
+    corners: &Corners,
+    kept: &[bool],
+    grid: Grid,
+) -> Vec<Patch> {
+    let sampler = Sampler::new(mesh, grid);
+    let loops = face_loops(mesh.shape);
+    surface_faces(corners, &loops, kept)
+        .into_iter()
+        .map(|face| {
+            let (points, normals) = sampler.sample(&mesh.cells[face.cell], &mesh.nodes, face.face);
+            Patch {
+                cell: face.cell,
+                points,
+                normals,
+            }
         })
         .collect()
 }
 
-/// The same key for a face whichever corner and direction it starts from.
-fn key(mut nodes: [usize; 4]) -> [usize; 4] {
-    nodes.sort_unstable();
-    nodes
+/// What sampling the faces of one mesh needs, computed once.
+enum Sampler {
+    /// Hex faces through the tensor map: the 1-D basis at `t = k / m`.
+    Hex { p: usize, table: Vec<Vec<f64>> },
+    /// Tet faces through their own triangle: each face's nodes (local
+    /// numbers, triangle lattice order), and the triangle basis's values
+    /// and gradients at every grid point, `n` functions a point.
+    Tet {
+        faces: Vec<Vec<usize>>,
+        n: usize,
+        values: Vec<f64>,
+        grads: Vec<[f64; 3]>,
+    },
+}
+
+impl Sampler {
+    fn new(mesh: &CurvedMesh<3>, grid: Grid) -> Sampler {
+        let (p, m) = (mesh.p, grid.m());
+        if mesh.shape != Shape::Tetrahedron {
+            return Sampler::Hex {
+                p,
+                table: basis_table(p, mesh.spacing, m),
+            };
+        }
+        let space =
+            simplex::space(Shape::Triangle, p, mesh.spacing).expect("order checked by validate");
+        let n = space.num_nodes();
+        let points = grid.params();
+        let (mut values, mut grads) = (
+            vec![0.0; n * points.len()],
+            vec![[0.0; 3]; n * points.len()],
+        );
+        for (i, [k, l]) in points.into_iter().enumerate() {
+            let xi = [k as f64 / m as f64, l as f64 / m as f64, 0.0];
+            space.eval(
+                xi,
+                &mut values[i * n..(i + 1) * n],
+                &mut grads[i * n..(i + 1) * n],
+            );
+        }
+        let faces = (0..4)
+            .map(|f| face_nodes(Shape::Tetrahedron, p, f))
+            .collect();
+        Sampler::Tet {
+            faces,
+            n,
+            values,
+            grads,
+        }
+    }
+
+    /// Face `f` (numbering of [`face_loops`]) of the cell with nodes
+    /// `cell`: its points and unit normals on the grid.
+    fn sample(
+        &self,
+        cell: &[usize],
+        nodes: &[[f64; 3]],
+        f: usize,
+    ) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        match self {
+            Sampler::Hex { p, table } => {
+                let points = sample_hex_face(cell, nodes, *p, f, table);
+                let normals = grid_normals(&points, table.len() - 1);
+                (points, normals)
+            }
+            Sampler::Tet {
+                faces,
+                n,
+                values,
+                grads,
+            } => {
+                let ids: Vec<[f64; 3]> = faces[f].iter().map(|&a| nodes[cell[a]]).collect();
+                let at = |g: usize| (&values[g * n..(g + 1) * n], &grads[g * n..(g + 1) * n]);
+                (0..values.len() / n)
+                    .map(|g| triangle_point(&ids, at(g)))
+                    .unzip()
+            }
+        }
+    }
+}
+
+/// The point of the Lagrange triangle through `nodes` with basis `values`
+/// and gradients there, and its unit normal: from the exact tangents, which
+/// the triangle grid has no simple neighbours for at its corners.
+fn triangle_point(
+    nodes: &[[f64; 3]],
+    (values, grads): (&[f64], &[[f64; 3]]),
+) -> ([f64; 3], [f64; 3]) {
+    let (mut x, mut du, mut dv) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    for ((y, &w), g) in nodes.iter().zip(values).zip(grads) {
+        x = add(x, scale(w, *y));
+        du = add(du, scale(g[0], *y));
+        dv = add(dv, scale(g[1], *y));
+    }
+    (x, normalise(cross(du, dv)))
+}
+
+/// Face `f` ([`HEX_FACES`] numbering) of the order-`p` hex with tensor-
+/// ordered nodes `cell`, sampled through the hex map on the grid of
+/// `table` (rows at `t = k / m`). The face's first corner is the grid's
+/// origin, its second lies along the grid's first axis, its fourth along
+/// the second.
+fn sample_hex_face(
+    cell: &[usize],
+    nodes: &[[f64; 3]],
+    p: usize,
+    f: usize,
+    table: &[Vec<f64>],
+) -> Vec<[f64; 3]> {
+    let m = table.len() - 1;
+    let q = p + 1;
+    let [r0, r1, _, r3] = HEX_FACES[f].map(|i| HEX_CORNERS[i]);
+    let axis_u = (0..3)
+        .find(|&d| r1[d] != r0[d])
+        .expect("face corners differ");
+    let axis_v = (0..3)
+        .find(|&d| r3[d] != r0[d])
+        .expect("face corners differ");
+    let fixed = 3 - axis_u - axis_v;
+    // The face lies where the basis along the fixed axis is exactly the
+    // first or the last function: the face depends on its own nodes only.
+    let mut delta = vec![0.0; q];
+    delta[r0[fixed] * p] = 1.0;
+    // Along a reversed axis, face parameter k/m is reference 1 − k/m.
+    let row = |k: usize, reversed: bool| &table[if reversed { m - k } else { k }];
+    let mut points = Vec::with_capacity((m + 1) * (m + 1));
+    for l in 0..=m {
+        for k in 0..=m {
+            let mut w: [&[f64]; 3] = [&delta, &delta, &delta];
+            w[axis_u] = row(k, r0[axis_u] == 1);
+            w[axis_v] = row(l, r0[axis_v] == 1);
+            let mut x = [0.0; 3];
+            for (c, &wc) in w[2].iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                for (b, &wb) in w[1].iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                    for (a, &wa) in w[0].iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                        let y = nodes[cell[a + q * b + q * q * c]];
+                        x = add(x, scale(wa * wb * wc, y));
+                    }
+                }
+            }
+            points.push(x);
+        }
+    }
+    points
+}
+
+/// Unit normals of a face sampled on the quad grid `m`, at its points,
+/// from central differences (one-sided on the border), all on the same
+/// side of the face. Shading with these, interpolated over each sub-quad,
+/// makes a curved face look smooth where flat sub-quads would show as
+/// facets.
+fn grid_normals(points: &[[f64; 3]], m: usize) -> Vec<[f64; 3]> {
+    let at = |k: usize, l: usize| points[k + (m + 1) * l];
+    let mut normals = Vec::with_capacity(points.len());
+    for l in 0..=m {
+        for k in 0..=m {
+            let du = sub(at((k + 1).min(m), l), at(k.saturating_sub(1), l));
+            let dv = sub(at(k, (l + 1).min(m)), at(k, l.saturating_sub(1)));
+            normals.push(normalise(cross(du, dv)));
+        }
+    }
+    normals
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mesh::HexMesh;
+    use crate::numeric::dot;
 
     fn brick(n: [usize; 3]) -> HexMesh {
         HexMesh::structured_box([0.0; 3], [n[0] as f64, n[1] as f64, n[2] as f64], n)
     }
 
+    fn hex_corners(m: &HexMesh) -> Corners {
+        Corners {
+            per_cell: 8,
+            nodes: m.cells.concat(),
+        }
+    }
+
+    /// The nodes of `face` of its cell, in the face's loop order.
+    fn nodes_of(corners: &Corners, loops: &[&[usize]], face: SurfaceFace) -> Vec<usize> {
+        loops[face.face]
+            .iter()
+            .map(|&i| corners.cell(face.cell)[i])
+            .collect()
+    }
+
+    fn hex_faces(m: &HexMesh, kept: &[bool]) -> Vec<Vec<usize>> {
+        let (corners, loops) = (hex_corners(m), face_loops(Shape::Hexahedron));
+        surface_faces(&corners, &loops, kept)
+            .into_iter()
+            .map(|f| nodes_of(&corners, &loops, f))
+            .collect()
+    }
+
     #[test]
     fn boundary_of_a_brick_matches_the_generated_faces() {
         let m = brick([3, 2, 2]);
-        let faces = surface_faces(&m.cells, &[true; 12]);
+        let faces = hex_faces(&m, &[true; 12]);
         assert_eq!(faces.len(), m.faces.len());
-        let mut got: Vec<_> = faces.iter().map(|f| key(f.nodes)).collect();
-        let mut want: Vec<_> = m.faces.iter().map(|f| key(f.nodes)).collect();
+        let mut got: Vec<_> = faces.iter().map(|f| key(f.iter().copied())).collect();
+        let mut want: Vec<_> = m.faces.iter().map(|f| key(f.nodes.into_iter())).collect();
         got.sort_unstable();
         want.sort_unstable();
         assert_eq!(got, want);
@@ -72,11 +494,14 @@ mod tests {
         // The generated boundary faces are counter-clockwise from outside;
         // ours must be too (same cyclic order, not reversed).
         let m = brick([2, 2, 1]);
-        let faces = surface_faces(&m.cells, &[true; 4]);
+        let faces = hex_faces(&m, &[true; 4]);
         for f in &m.faces {
-            let ours = faces.iter().find(|g| key(g.nodes) == key(f.nodes)).unwrap();
-            let start = ours.nodes.iter().position(|&n| n == f.nodes[0]).unwrap();
-            let rotated: [usize; 4] = std::array::from_fn(|i| ours.nodes[(start + i) % 4]);
+            let ours = faces
+                .iter()
+                .find(|g| key(g.iter().copied()) == key(f.nodes.into_iter()))
+                .unwrap();
+            let start = ours.iter().position(|&n| n == f.nodes[0]).unwrap();
+            let rotated: [usize; 4] = std::array::from_fn(|i| ours[(start + i) % 4]);
             assert_eq!(rotated, f.nodes);
         }
     }
@@ -84,15 +509,131 @@ mod tests {
     #[test]
     fn dropping_a_cell_exposes_the_face_it_shared() {
         let m = brick([2, 1, 1]);
-        assert_eq!(surface_faces(&m.cells, &[true, true]).len(), 10);
-        let faces = surface_faces(&m.cells, &[true, false]);
+        assert_eq!(hex_faces(&m, &[true, true]).len(), 10);
+        let corners = hex_corners(&m);
+        let loops = face_loops(Shape::Hexahedron);
+        let faces = surface_faces(&corners, &loops, &[true, false]);
         assert_eq!(faces.len(), 6, "cell 0 alone shows all six faces");
         assert!(faces.iter().all(|f| f.cell == 0));
         let inner = faces
             .iter()
-            .filter(|f| f.nodes.iter().all(|&n| m.nodes[n][0] == 1.0))
+            .filter(|&&f| {
+                nodes_of(&corners, &loops, f)
+                    .iter()
+                    .all(|&n| m.nodes[n][0] == 1.0)
+            })
             .count();
         assert_eq!(inner, 1, "the face at x = 1 is exposed");
-        assert!(surface_faces(&m.cells, &[false, false]).is_empty());
+        assert!(surface_faces(&corners, &loops, &[false, false]).is_empty());
+    }
+
+    /// The unit cube split into six tets around its diagonal (0,0,0)–(1,1,1),
+    /// each positively oriented, on the cube's eight corner nodes.
+    fn kuhn_cube() -> (Vec<[f64; 3]>, Corners) {
+        let nodes = (0..8)
+            .map(|i: usize| [i & 1, i >> 1 & 1, i >> 2 & 1].map(|b| b as f64))
+            .collect();
+        // Corner i of the cube is (i & 1, i >> 1 & 1, i >> 2 & 1): the path
+        // along axes a, b, c; an odd permutation of the axes turns the tet
+        // inside out.
+        let even = [[1, 2], [2, 4], [4, 1]];
+        let tets: Vec<usize> = [[1, 2], [1, 4], [2, 1], [2, 4], [4, 1], [4, 2]]
+            .iter()
+            .flat_map(|&[a, b]| {
+                if even.contains(&[a, b]) {
+                    [0, a, a | b, 7]
+                } else {
+                    [0, a | b, a, 7]
+                }
+            })
+            .collect();
+        (
+            nodes,
+            Corners {
+                per_cell: 4,
+                nodes: tets,
+            },
+        )
+    }
+
+    #[test]
+    fn a_cube_of_tets_shows_twelve_outward_triangles() {
+        let (nodes, corners) = kuhn_cube();
+        let loops = face_loops(Shape::Tetrahedron);
+        let mean = |ids: &[usize]| {
+            scale(
+                1.0 / ids.len() as f64,
+                ids.iter().fold([0.0; 3], |c, &n| add(c, nodes[n])),
+            )
+        };
+        for c in 0..6 {
+            let t = corners
+                .cell(c)
+                .iter()
+                .map(|&n| nodes[n])
+                .collect::<Vec<_>>();
+            let det = dot(sub(t[1], t[0]), cross(sub(t[2], t[0]), sub(t[3], t[0])));
+            assert!(det > 0.0, "tet {c} is inverted");
+        }
+        let faces = surface_faces(&corners, &loops, &[true; 6]);
+        assert_eq!(faces.len(), 12, "two triangles per side of the cube");
+        for f in faces {
+            let ids = nodes_of(&corners, &loops, f);
+            let x = ids.iter().map(|&n| nodes[n]).collect::<Vec<_>>();
+            let normal = cross(sub(x[1], x[0]), sub(x[2], x[0]));
+            // On a side of the cube, facing away from its cell.
+            assert!((0..3).any(|d| x.iter().all(|y| y[d] == x[0][d])), "{x:?}");
+            assert!(dot(normal, sub(mean(&ids), mean(corners.cell(f.cell)))) > 0.0);
+        }
+        // Dropping tets exposes the faces they shared: a lone tet shows
+        // its four.
+        let mut kept = [false; 6];
+        kept[2] = true;
+        assert_eq!(surface_faces(&corners, &loops, &kept).len(), 4);
+    }
+
+    #[test]
+    fn grids_cover_the_face_with_pieces_facing_one_way() {
+        for grid in [Grid::Quad(1), Grid::Quad(4), Grid::Tri(1), Grid::Tri(6)] {
+            let params = grid.params();
+            let m = grid.m() as f64;
+            for (i, &[k, l]) in params.iter().enumerate() {
+                assert_eq!(grid.at(k, l), i);
+            }
+            let (n, pieces) = (grid.piece_corners(), grid.pieces());
+            let mut area = 0.0;
+            for piece in pieces.chunks_exact(n) {
+                let x: Vec<[f64; 2]> = piece
+                    .iter()
+                    .map(|&i| params[i].map(|c| c as f64 / m))
+                    .collect();
+                let twice: f64 = (0..n)
+                    .map(|j| {
+                        let (a, b) = (x[j], x[(j + 1) % n]);
+                        a[0] * b[1] - a[1] * b[0]
+                    })
+                    .sum();
+                assert!(twice > 0.0, "{grid:?}: {piece:?} is clockwise");
+                area += 0.5 * twice;
+            }
+            let whole = if n == 4 { 1.0 } else { 0.5 };
+            assert!((area - whole).abs() < 1e-12, "{grid:?}: {area}");
+            // The border runs along the face's edges: every segment has
+            // both ends on the same side of the reference face.
+            let border = grid.border();
+            assert_eq!(border.len(), n * grid.m());
+            for [a, b] in border {
+                let (a, b) = (params[a], params[b]);
+                let on = |s: fn([usize; 2]) -> bool| s(a) && s(b);
+                let mm = grid.m();
+                let sides = on(|x| x[1] == 0) || on(|x| x[0] == 0);
+                let far = if n == 4 {
+                    [a, b].iter().all(|x| x[0] == mm) || [a, b].iter().all(|x| x[1] == mm)
+                } else {
+                    [a, b].iter().all(|x| x[0] + x[1] == mm)
+                };
+                assert!(sides || far, "{grid:?}: {a:?}–{b:?}");
+            }
+        }
     }
 }

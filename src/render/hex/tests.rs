@@ -1,15 +1,17 @@
-//! Tests that render real hex-mesh pictures, encode them as PNG, decode
-//! them again and check pixels: colours, shading, positions, hidden
+//! Tests that render real hex- and tet-mesh pictures, encode them as PNG,
+//! decode them again and check pixels: colours, shading, positions, hidden
 //! surfaces, clipping, curved faces and errors.
 
+use std::collections::HashMap;
 use std::f64::consts::PI;
 
 use image::RgbaImage;
 
 use super::view::{self, shade_colour};
 use super::*;
-use crate::mesh::element::Spacing;
+use crate::mesh::element::{simplex, Spacing};
 use crate::mesh::HexMesh;
+use crate::numeric::cross3;
 use crate::render::tests::{assert_close, brightness, darkest_near, decoded, pixel, WHITE};
 
 const BLUE_VALUE: f64 = 0.9;
@@ -804,7 +806,8 @@ fn clipping_drops_whole_curved_cells_by_their_corners() {
 #[test]
 fn every_sampled_point_is_finite_and_on_the_face() {
     let mesh = bulged_block(3, [2, 2, 2]);
-    let patches = surface_patches(&mesh, &[true; 8], 9);
+    let corners = Corners::of(&mesh);
+    let patches = surface_patches(&mesh, &corners, &[true; 8], Grid::Quad(9));
     assert_eq!(patches.len(), 24);
     for f in &patches {
         assert_eq!(f.points.len(), 100);
@@ -839,4 +842,462 @@ fn a_curved_mesh_with_a_bad_cell_is_an_error() {
         .unwrap();
         render_hexes(&shell, &[1.0, 1.1], &RenderOptions3::default()).unwrap();
     }
+}
+
+// Tetrahedra.
+
+/// The box `[0, n]` of unit cubes, each split into six tets around its
+/// diagonal from its lowest to its highest corner (so neighbouring cubes
+/// split their shared side alike), as an order-`p` tet mesh: each tet's
+/// nodes, in the lattice order, at the reference nodes of `spacing` mapped
+/// affinely into the tet and then through `map`. Nodes of shared edges and
+/// faces are shared (found by their lattice point in the box); every tet
+/// is positively oriented before `map`. Cube `c` (x fastest) holds cells
+/// `6c..6c + 6`.
+fn tet_box(
+    p: usize,
+    spacing: Spacing,
+    n: [usize; 3],
+    map: impl Fn([f64; 3]) -> [f64; 3],
+) -> CurvedMesh<3> {
+    let reference = &simplex::space(Shape::Tetrahedron, p, spacing)
+        .unwrap()
+        .nodes;
+    let lattice = simplex::lattice(Shape::Tetrahedron, p);
+    let mut ids: HashMap<[usize; 3], usize> = HashMap::new();
+    let (mut nodes, mut cells) = (Vec::new(), Vec::new());
+    for cube in 0..n.iter().product() {
+        let base = [cube % n[0], cube / n[0] % n[1], cube / (n[0] * n[1])];
+        for axes in [
+            [0, 1, 2],
+            [0, 2, 1],
+            [1, 0, 2],
+            [1, 2, 0],
+            [2, 0, 1],
+            [2, 1, 0],
+        ] {
+            // The path from the lowest corner along the three axes.
+            let mut v = [base; 4];
+            for (s, &a) in axes.iter().enumerate() {
+                v[s + 1] = v[s];
+                v[s + 1][a] += 1;
+            }
+            let edge =
+                |v: &[[usize; 3]; 4], k: usize| sub(v[k].map(|x| x as f64), v[0].map(|x| x as f64));
+            if dot(edge(&v, 1), cross3(edge(&v, 2), edge(&v, 3))) < 0.0 {
+                v.swap(1, 2);
+            }
+            let e = |k: usize| edge(&v, k);
+            let cell = lattice
+                .iter()
+                .zip(reference)
+                .map(|(&[i, j, k], xi)| {
+                    let at: [usize; 3] = std::array::from_fn(|d| {
+                        (p - i - j - k) * v[0][d] + i * v[1][d] + j * v[2][d] + k * v[3][d]
+                    });
+                    *ids.entry(at).or_insert_with(|| {
+                        let x = (0..3).fold(v[0].map(|c| c as f64), |x, a| {
+                            add(x, scale(xi[a], e(a + 1)))
+                        });
+                        nodes.push(map(x));
+                        nodes.len() - 1
+                    })
+                })
+                .collect();
+            cells.push(cell);
+        }
+    }
+    CurvedMesh {
+        shape: Shape::Tetrahedron,
+        p,
+        spacing,
+        nodes,
+        cells,
+        boundary: vec![],
+        part_names: vec![],
+    }
+}
+
+/// `v` for each of the six tets of every cube listed, cube by cube.
+fn per_cube(cubes: &[f64]) -> Vec<f64> {
+    cubes.iter().flat_map(|&v| [v; 6]).collect()
+}
+
+/// The number of non-white pixels of the plot region.
+fn drawn_area(img: &RgbaImage, plan: &HexPlan) -> usize {
+    plot_pixels(plan)
+        .filter(|&(x, y)| !is_white(pixel(img, x as f64, y as f64)))
+        .count()
+}
+
+/// The bulge of [`bulged_block`]: the side x = 1 bulges out by 0.3 at
+/// y = ½.
+fn bulge([x, y, z]: [f64; 3]) -> [f64; 3] {
+    [x * (1.0 + 1.2 * y * (1.0 - y)), y, z]
+}
+
+#[test]
+fn a_cube_of_tets_covers_what_the_hex_cube_covers() {
+    let hex = brick([1, 1, 1]);
+    let tets = tet_box(1, Spacing::Equispaced, [1, 1, 1], |x| x);
+    for camera in [
+        Camera::default(),
+        from_above(),
+        Camera {
+            azimuth_deg: -50.0,
+            elevation_deg: -20.0,
+            distance: Some(3.0),
+        },
+    ] {
+        let o = opts(camera);
+        let (a, plan_a) = render_decoded(&hex, &[1.05], &o);
+        let (b, plan_b) = render_decoded(&tets, &[1.05; 6], &o);
+        assert_eq!(plan_b.patches.len(), 12, "two triangles a side");
+        assert_eq!(
+            plan_a.frame.layout.plot_region(),
+            plan_b.frame.layout.plot_region()
+        );
+        let (area_a, area_b) = (drawn_area(&a, &plan_a), drawn_area(&b, &plan_b));
+        eprintln!("{camera:?}: hex {area_a} pixels, tets {area_b}");
+        assert!(area_a > 10_000, "{area_a}");
+        assert!(
+            (area_b as f64 / area_a as f64 - 1.0).abs() < 0.02,
+            "hex {area_a} vs tets {area_b}"
+        );
+    }
+}
+
+#[test]
+fn tet_faces_are_shaded_like_hex_faces_with_their_edges_drawn() {
+    let tets = tet_box(1, Spacing::Equispaced, [1, 1, 1], |x| x);
+    let (img, plan) = render_decoded(&tets, &[RED_VALUE; 6], &opts(Camera::default()));
+    // Off the triangles' edges each side of the cube has the hex colours.
+    let sides = [
+        ([0.0, 0.0, 1.0], [0.75, 0.25, 1.0]),
+        ([0.0, -1.0, 0.0], [0.75, 0.0, 0.25]),
+        ([1.0, 0.0, 0.0], [1.0, 0.75, 0.25]),
+    ];
+    for (n, at) in sides {
+        assert_close(
+            pixel_of(&img, &plan, at),
+            expected(&plan, RED_VALUE, n),
+            &format!("{n:?}"),
+        );
+    }
+    // The top is split along its diagonal (0,0,1)–(1,1,1), drawn as an
+    // edge; the other diagonal is no edge.
+    let top = expected(&plan, RED_VALUE, [0.0, 0.0, 1.0]);
+    let [x, y, _] = plan.to_image([0.5, 0.5, 1.0]).unwrap();
+    let line = darkest_near(&img, x, y);
+    assert!(
+        brightness(line) * 10 < brightness(top) * 9,
+        "{line:?} vs {top:?}"
+    );
+    assert_close(
+        pixel_of(&img, &plan, [0.8, 0.2, 1.0]),
+        top,
+        "off the diagonal",
+    );
+}
+
+#[test]
+fn clipping_tets_shows_the_inside() {
+    // Two cubes of tets along x, seen from +x: the x = 2 side is red; with
+    // the second cube clipped away the side x = 1 between them shows
+    // blue.
+    let mesh = tet_box(1, Spacing::Equispaced, [2, 1, 1], |x| x);
+    let values = per_cube(&[BLUE_VALUE, RED_VALUE]);
+    let camera = Camera {
+        azimuth_deg: 90.0,
+        elevation_deg: 0.0,
+        distance: None,
+    };
+    let bounds = Some(([0.0; 3], [2.0, 1.0, 1.0]));
+    let whole = RenderOptions3 {
+        bounds,
+        ..opts(camera)
+    };
+    let cut = RenderOptions3 {
+        clip: Some(ClipPlane {
+            point: [1.0, 0.0, 0.0],
+            normal: [1.0, 0.0, 0.0],
+        }),
+        ..whole.clone()
+    };
+    let side = [1.0, 0.0, 0.0];
+    let (img, plan) = render_decoded(&mesh, &values, &whole);
+    assert_eq!(plan.patches.len(), 20);
+    assert_close(
+        pixel_of(&img, &plan, [2.0, 0.75, 0.25]),
+        expected(&plan, RED_VALUE, side),
+        "x = 2",
+    );
+    let (img, plan) = render_decoded(&mesh, &values, &cut);
+    assert_eq!(
+        plan.patches.len(),
+        12,
+        "the kept cube shows its twelve triangles"
+    );
+    assert!(plan.patches.iter().all(|f| f.cell < 6));
+    assert_close(
+        pixel_of(&img, &plan, [1.0, 0.75, 0.25]),
+        expected(&plan, BLUE_VALUE, side),
+        "inside at x = 1",
+    );
+    let reds = plot_pixels(&plan)
+        .filter(|&(x, y)| reddish(pixel(&img, x as f64, y as f64)))
+        .count();
+    assert_eq!(reds, 0, "the dropped cube is gone");
+}
+
+#[test]
+fn bulged_tets_follow_the_curved_side_at_p3_and_not_at_p1() {
+    let bounds = Some(([0.0; 3], [1.3, 1.0, 1.0]));
+    let o = RenderOptions3 {
+        bounds,
+        ..opts(from_above())
+    };
+    for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+        let (flat, plan1) = render_decoded(&tet_box(1, spacing, [1, 1, 1], bulge), &[0.9; 6], &o);
+        let (img, plan) = render_decoded(&tet_box(3, spacing, [1, 1, 1], bulge), &[0.9; 6], &o);
+        let top = expected(&plan, 0.9, [0.0, 0.0, 1.0]);
+        // Right of the chord x = 1, left of the curve x = 1.3 at y = ½.
+        assert_close(
+            pixel_of(&img, &plan, [1.15, 0.5, 1.0]),
+            top,
+            "bulge at p = 3",
+        );
+        assert_eq!(
+            pixel_of(&flat, &plan1, [1.15, 0.5, 1.0]),
+            WHITE,
+            "no bulge at p = 1"
+        );
+        // Beyond the curve near a corner (x = 1.108 at y = 0.1).
+        assert_eq!(pixel_of(&img, &plan, [1.25, 0.1, 1.0]), WHITE);
+        // No line between the sub-triangles inside a face: on the border
+        // of the first row of them, the plain face colour.
+        assert_close(
+            pixel_of(&img, &plan, [0.7, 1.0 / 9.0, 1.0]),
+            top,
+            "sub-triangle border",
+        );
+        let (a1, a3) = (drawn_area(&flat, &plan1), drawn_area(&img, &plan));
+        // The bulge adds 1.2/6 = 0.2 to the unit square seen from above.
+        eprintln!("{spacing:?}: drawn {a1} pixels at p = 1, {a3} at p = 3");
+        assert!((a3 as f64 / a1 as f64 - 1.2).abs() < 0.03, "{a1} vs {a3}");
+        // The same surface as a curved hex draws the same area.
+        let (hex, plan_h) = render_decoded(&bulged_block(2, [1, 1, 1]), &[0.9], &o);
+        let ah = drawn_area(&hex, &plan_h);
+        assert!(
+            (a3 as f64 / ah as f64 - 1.0).abs() < 0.02,
+            "tets {a3} vs hex {ah}"
+        );
+    }
+}
+
+#[test]
+fn sampled_tet_faces_lie_on_the_surface_with_outward_normals() {
+    for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+        let mesh = tet_box(3, spacing, [2, 1, 1], |x| bulge(scale(0.5, x)));
+        let corners = Corners::of(&mesh);
+        let patches = surface_patches(&mesh, &corners, &[true; 12], Grid::Tri(9));
+        assert_eq!(patches.len(), 20);
+        for f in &patches {
+            assert_eq!((f.points.len(), f.normals.len()), (55, 55));
+            for &[x, y, z] in &f.points {
+                let on = [x.abs(), z.abs(), (z - 0.5).abs(), y.abs(), (y - 0.5).abs()]
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min)
+                    .min((x - (1.0 + 1.2 * y * (1.0 - y))).abs());
+                // p = 3 reproduces the quadratic bulge exactly.
+                assert!(on < 1e-12, "{:?} is not on the surface", [x, y, z]);
+            }
+            // The normals of flat sides are theirs, pointing out.
+            let mean = scale(
+                1.0 / 55.0,
+                f.points.iter().fold([0.0; 3], |s, &x| add(s, x)),
+            );
+            for (side, normal) in [
+                (mean[2] - 0.5, [0.0, 0.0, 1.0]),
+                (mean[1], [0.0, -1.0, 0.0]),
+            ] {
+                if side.abs() < 1e-12 {
+                    assert!(
+                        f.normals
+                            .iter()
+                            .all(|&n| sub(n, normal).iter().all(|d| d.abs() < 1e-12)),
+                        "{spacing:?}: {:?}",
+                        f.normals
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn tets_of_every_order_and_spacing_are_drawn() {
+    for p in 1..=4 {
+        for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+            let mesh = tet_box(p, spacing, [2, 1, 1], crate::mesh::curved::tests::bend3);
+            let values: Vec<f64> = (0..12).map(|c| 0.9 + 0.02 * c as f64).collect();
+            let (img, plan) = render_decoded(&mesh, &values, &opts(Camera::default()));
+            let m = if p == 1 { 1 } else { SUBQUADS_PER_ORDER * p };
+            assert_eq!(plan.grid, Grid::Tri(m));
+            assert_eq!(plan.patches.len(), 20, "p = {p}");
+            assert!(plan
+                .patches
+                .iter()
+                .all(|f| f.points.len() == (m + 1) * (m + 2) / 2));
+            let area = drawn_area(&img, &plan);
+            assert!(area > 10_000, "p = {p} {spacing:?}: {area} pixels drawn");
+        }
+    }
+}
+
+#[test]
+fn bad_tet_meshes_are_errors_not_panics() {
+    let ok = RenderOptions3::default();
+    let mesh = tet_box(3, Spacing::GaussLobatto, [1, 1, 1], |x| x);
+    let values = [1.0; 6];
+    let mut bad = mesh.clone();
+    bad.cells[2][7] = 999;
+    let nodes = mesh.nodes.len();
+    assert!(matches!(
+        render_hexes(&bad, &values, &ok),
+        Err(RenderError::BadNodeIndex { cell: 2, node: 999, nodes: n }) if n == nodes
+    ));
+    let mut short = mesh.clone();
+    short.cells[4].pop();
+    assert!(matches!(
+        render_hexes(&short, &values, &ok),
+        Err(RenderError::InvalidCurvedMesh { .. })
+    ));
+    // Tets labelled as hexes, hexes as tets, and prisms, which are not
+    // drawn.
+    let as_hexes = CurvedMesh {
+        shape: Shape::Hexahedron,
+        ..mesh.clone()
+    };
+    assert!(matches!(
+        render_hexes(&as_hexes, &values, &ok),
+        Err(RenderError::InvalidCurvedMesh { .. })
+    ));
+    let as_tets = CurvedMesh {
+        shape: Shape::Tetrahedron,
+        ..brick([1, 1, 1])
+    };
+    assert!(matches!(
+        render_hexes(&as_tets, &[1.0], &ok),
+        Err(RenderError::InvalidCurvedMesh { .. })
+    ));
+    let p = 1;
+    let prism = CurvedMesh {
+        shape: Shape::Prism,
+        cells: vec![(0..Shape::Prism.num_nodes(p)).collect()],
+        ..tet_box(p, Spacing::Equispaced, [1, 1, 1], |x| x)
+    };
+    assert!(matches!(
+        render_hexes(&prism, &[1.0], &ok),
+        Err(RenderError::InvalidCurvedMesh { .. })
+    ));
+    // A collapsed tet mesh still renders.
+    let mut collapsed = mesh.clone();
+    collapsed
+        .nodes
+        .iter_mut()
+        .skip(1)
+        .for_each(|x| *x = [0.3; 3]);
+    render_hexes(&collapsed, &values, &opts(Camera::default())).unwrap();
+}
+
+#[test]
+fn zz_snapshot_tmp() {
+    let dir = std::path::Path::new("/tmp/hexsnap");
+    std::fs::create_dir_all(dir).unwrap();
+    let shell = |p| {
+        CurvedMesh::structured(p, Spacing::GaussLobatto, [3, 2, 2], |[u, v, w]| {
+            let (r, t) = (1.0 + v, 0.5 * PI * u);
+            [r * t.cos(), r * t.sin(), w + 0.2 * u * v]
+        })
+        .unwrap()
+    };
+    let clip = Some(ClipPlane {
+        point: [0.5, 0.5, 0.5],
+        normal: [1.0, 1.0, 0.3],
+    });
+    let cases: Vec<(String, CurvedMesh<3>, RenderOptions3)> = vec![
+        ("brick".into(), brick([3, 2, 2]), RenderOptions3::default()),
+        (
+            "brick_clip".into(),
+            brick([3, 3, 3]),
+            RenderOptions3 {
+                clip,
+                ..RenderOptions3::default()
+            },
+        ),
+        (
+            "bulge2".into(),
+            bulged_block(2, [2, 2, 1]),
+            opts(Camera {
+                distance: Some(3.0),
+                ..Camera::default()
+            }),
+        ),
+        (
+            "bulge3".into(),
+            bulged_block(3, [2, 1, 2]),
+            RenderOptions3 {
+                clip,
+                ..opts(Camera::default())
+            },
+        ),
+        ("shell1".into(), shell(1), RenderOptions3::default()),
+        (
+            "shell4".into(),
+            shell(4),
+            RenderOptions3 {
+                camera: Camera {
+                    azimuth_deg: -60.0,
+                    elevation_deg: 40.0,
+                    distance: None,
+                },
+                ..RenderOptions3::default()
+            },
+        ),
+        (
+            "noedge".into(),
+            shell(2),
+            RenderOptions3 {
+                draw_edges: false,
+                ..opts(from_above())
+            },
+        ),
+    ];
+    for (name, mesh, o) in cases {
+        let values: Vec<f64> = (0..mesh.cells.len())
+            .map(|c| 0.8 + 0.05 * (c % 9) as f64)
+            .collect();
+        let t = std::time::Instant::now();
+        let pm = render_hexes(&mesh, &values, &o).unwrap();
+        eprintln!("{name}: {:?}", t.elapsed());
+        let path = dir.join(format!("{name}.rgba"));
+        if path.exists() {
+            assert!(std::fs::read(&path).unwrap() == pm.data(), "{name} differs");
+        } else {
+            std::fs::write(&path, pm.data()).unwrap();
+        }
+    }
+}
+
+#[test]
+fn zz_png_tmp() {
+    let mesh = tet_box(3, Spacing::GaussLobatto, [3, 2, 2], crate::mesh::curved::tests::bend3);
+    let values: Vec<f64> = (0..mesh.cells.len()).map(|c| 0.8 + 0.4 * ((c * 7) % 13) as f64 / 13.0).collect();
+    let clip = Some(ClipPlane { point: [1.5, 1.0, 1.0], normal: [1.0, -1.0, 0.6] });
+    let pm = render_hexes(&mesh, &values, &RenderOptions3 { clip, width: 700, ..RenderOptions3::default() }).unwrap();
+    crate::render::write_png(&pm, "/tmp/tets_clip.png").unwrap();
+    let mesh1 = tet_box(1, Spacing::Equispaced, [3, 2, 2], crate::mesh::curved::tests::bend3);
+    let pm = render_hexes(&mesh1, &values, &RenderOptions3 { width: 700, ..RenderOptions3::default() }).unwrap();
+    crate::render::write_png(&pm, "/tmp/tets_p1.png").unwrap();
 }

@@ -1,7 +1,7 @@
 //! The camera: projecting world points to the screen, and shading faces.
 
-use crate::numeric::{add, cross3 as cross, dot, norm, scale, sub};
 use super::Camera;
+use crate::numeric::{add, cross3 as cross, dot, norm, scale, sub};
 use crate::render::RenderError;
 
 /// Share of light that reaches every face whatever its direction. Fairly
@@ -124,17 +124,41 @@ pub(crate) fn shade_colour(base: [u8; 3], factor: f64) -> [u8; 3] {
     base.map(|c| (c as f64 * factor).round().clamp(0.0, 255.0) as u8)
 }
 
-/// Unit normal of a (possibly non-planar) quad: the cross product of its
-/// diagonals, which is the mean normal of the bilinear patch; zero for a
-/// quad collapsed to a line or point.
-pub(crate) fn quad_normal(p: &[[f64; 3]; 4]) -> [f64; 3] {
-    normalise(cross(sub(p[2], p[0]), sub(p[3], p[1])))
+/// Twice the vector area of a triangle or of a (possibly non-planar)
+/// quad: for a quad the cross product of its diagonals, which is the mean
+/// normal of the bilinear patch.
+///
+/// # Panics
+/// For another number of corners (the faces' pieces have 3 or 4).
+fn area_vector(p: &[[f64; 3]]) -> [f64; 3] {
+    match *p {
+        [a, b, c] => cross(sub(b, a), sub(c, a)),
+        [a, b, c, d] => cross(sub(c, a), sub(d, b)),
+        _ => panic!("a piece has 3 or 4 corners, not {}", p.len()),
+    }
 }
 
-/// Area of the quad's projection on its mean plane (half the length of
-/// the cross product of the diagonals).
-pub(crate) fn quad_area(p: &[[f64; 3]; 4]) -> f64 {
-    0.5 * norm(cross(sub(p[2], p[0]), sub(p[3], p[1])))
+/// Unit normal of a triangle or quad ([`area_vector`]), following its
+/// corner order; zero for one collapsed to a line or point.
+pub(crate) fn polygon_normal(p: &[[f64; 3]]) -> [f64; 3] {
+    normalise(area_vector(p))
+}
+
+/// Area of a triangle, or of a quad's projection on its mean plane.
+pub(crate) fn polygon_area(p: &[[f64; 3]]) -> f64 {
+    0.5 * norm(area_vector(p))
+}
+
+/// The mean of a triangle's or quad's corners (a quad's summed in pairs,
+/// as the hex pictures always did).
+pub(crate) fn centroid(p: &[[f64; 3]]) -> [f64; 3] {
+    match *p {
+        [a, b, c, d] => scale(0.25, add(add(a, b), add(c, d))),
+        _ => scale(
+            1.0 / p.len() as f64,
+            p.iter().fold([0.0; 3], |s, &x| add(s, x)),
+        ),
+    }
 }
 
 /// `a` scaled to unit length, or zero if it has none.

@@ -1,0 +1,167 @@
+//! `deformesh curve` on triangle and tetrahedral meshes made by Gmsh: every
+//! element certified valid, the real Gmsh reads the files and agrees, the
+//! curved boundary on its shape as closely as Gmsh's own `setOrder`.
+
+use crate::common;
+
+use deformesh::app::driver::{curve_file, CurveJob, CurveReport, OutputFormat};
+use deformesh::highorder::curve::CurveOptions;
+use deformesh::mesh::CurvedMesh;
+use std::path::{Path, PathBuf};
+
+const SPHERE_HALF: &str = "[[group]]\nname = \"sphere\"\nkind = \"curve\"\nshape = { type = \"sphere\", centre = [0.0, 0.0, 0.0], radius = 0.5 }\n";
+const SPHERE_ONE: &str = "[[group]]\nname = \"sphere\"\nkind = \"curve\"\nshape = { type = \"sphere\", centre = [0.0, 0.0, 0.0], radius = 1.0 }\n";
+const DISK: &str = "[[group]]\nname = \"wall\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 1.0 }\n";
+
+/// A mesh of tests/python/`script` (KIND OUT ARGS), with Gmsh's own
+/// curving figures when ARGS ask for them.
+fn gmsh_mesh(dir: &Path, script: &str, kind: &str, name: &str, args: &[&str]) -> (PathBuf, Option<serde_json::Value>) {
+    let out = dir.join(name);
+    let mut all = vec![kind.to_string(), out.display().to_string()];
+    all.extend(args.iter().map(|s| s.to_string()));
+    let stdout = common::run_script(script, &all);
+    let figures = (!stdout.is_empty()).then(|| serde_json::from_slice(&stdout).unwrap());
+    (out, figures)
+}
+
+/// `curve` of `file` at order p (default options) into `dir`.
+fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, PathBuf) {
+    let g = dir.join("geometry.toml");
+    std::fs::write(&g, geometry).unwrap();
+    let output = dir.join(format!("{}_p{p}.msh", file.file_stem().unwrap().to_string_lossy()));
+    let job = CurveJob { input: file.to_path_buf(), geometry: g, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300 };
+    let r = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{} at p = {p}: {e}", file.display()));
+    (r, output)
+}
+
+/// The real Gmsh reads `file` (`count` cells of MSH type `ty`) and finds
+/// every cell valid; its minDetJac (a lower bound, on the same reference
+/// simplex as ours) is never above a value our det J takes and within
+/// `rel` of our certified bound; its sampled scaled Jacobian (minSIGE) is
+/// within `sj` of ours. Returns the largest differences.
+fn gmsh_agrees_simplex<const D: usize>(file: &Path, ty: i64, count: usize, rel: f64, sj: f64) -> (f64, f64) {
+    let g = common::run_checker("check_msh.py", file);
+    assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
+    let block = if D == 2 { &g["elements_2d"] } else { &g["elements_3d"] };
+    let (gmin, gsige) = (common::floats(&block["minDetJac"]), common::floats(&block["minSIGE"]));
+    let ours = common::our_certificates::<D>(file);
+    assert_eq!(gmin.len(), ours.len());
+    let (mut worst_det, mut worst_sj) = (0.0f64, 0.0f64);
+    for (k, ((g, s), o)) in gmin.iter().zip(&gsige).zip(&ours).enumerate() {
+        assert!(*g > 0.0 && o.valid, "element {k}: Gmsh's minDetJac {g}, ours {o:?}");
+        assert!(*g <= o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", o.min_det_upper);
+        worst_det = worst_det.max((o.min_det_lower - g).abs() / o.min_det_lower);
+        worst_sj = worst_sj.max((s - o.min_scaled_jacobian).abs());
+    }
+    assert!(worst_det < rel, "Gmsh's minDetJac and ours differ by {worst_det:e} relative");
+    assert!(worst_sj < sj, "Gmsh's minSIGE and our scaled Jacobian differ by {worst_sj:e}");
+    (worst_det, worst_sj)
+}
+
+/// Every node of every boundary element of `group` in the written file is
+/// on the shape (`distance`) to `tol`; returns how many were checked.
+fn group_nodes_on<const D: usize>(file: &Path, group: &str, distance: impl Fn([f64; D]) -> f64, tol: f64) -> usize {
+    let mesh = CurvedMesh::<D>::read_msh(file).unwrap();
+    let part = mesh.part_names.iter().position(|n| n == group).unwrap();
+    let mut checked = 0;
+    for b in mesh.boundary.iter().filter(|b| b.part == part) {
+        for &n in &b.nodes {
+            assert!(distance(mesh.nodes[n]) < tol, "node {n} of `{group}` {:e} off", distance(mesh.nodes[n]));
+            checked += 1;
+        }
+    }
+    checked
+}
+
+#[test]
+fn a_triangle_boundary_layer_curves_validly_at_p2_p3_p4_and_gmsh_agrees() {
+    // the mesh: the square minus the circle r = 0.5, a 1e-4
+    // triangle layer (3,834 triangles with this Gmsh); Gmsh's setOrder(3)
+    // leaves 64 of them inverted (measured), ours none
+    let dir = tempfile::tempdir().unwrap();
+    let circle = |x: [f64; 2]| (x[0].hypot(x[1]) - 0.5).abs();
+    for (p, ty) in [(2, 9), (3, 21), (4, 23)] {
+        let (file, gmsh) = gmsh_mesh(dir.path(), "triangle_meshes.py", "layer", "layer.msh", &["--order", &p.to_string()]);
+        let gmsh = gmsh.unwrap();
+        let (r, out) = curve(dir.path(), &file, common::WALL_CIRCLE, p);
+        assert_eq!(r.cells, gmsh["elements"].as_u64().unwrap() as usize);
+        assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        let checked = group_nodes_on::<2>(&out, "wall", circle, 1e-12);
+        assert!(checked > 50 * (p + 1), "{checked} wall nodes");
+        let (det, sj) = gmsh_agrees_simplex::<2>(&out, ty, r.cells, 2e-3, 2e-3);
+        let ours = r.quality.boundary_error["wall"].samples;
+        let theirs = gmsh["boundary_sample_distance"].as_f64().unwrap();
+        eprintln!(
+            "triangle layer p = {p}: {} triangles, min det J {:.3e}, scaled Jacobian {:.4}; Gmsh setOrder {} invalid, min SJ {:.3}; wall error {ours:.3e} vs Gmsh {theirs:.3e}; Gmsh agrees to {det:.1e} (det J), {sj:.1e} (SJ); {:.2} s vs {:.3} s",
+            r.cells, r.quality.min_det_j, r.quality.scaled_jacobian.min, gmsh["invalid"], gmsh["min_sj"], r.total_s, gmsh["seconds"].as_f64().unwrap()
+        );
+        assert!(ours <= 2.0 * theirs, "p = {p}: wall error {ours:e} against Gmsh's {theirs:e}");
+        if p == 3 {
+            assert!(gmsh["invalid"].as_u64().unwrap() > 0, "Gmsh's setOrder leaves this mesh invalid");
+        }
+    }
+}
+
+#[test]
+fn sliding_triangles_converge_at_the_order_on_a_disk() {
+    // the disk r = 1 of Gmsh triangles at h = 0.4, 0.2, 0.1: the sampled
+    // boundary error falls like h^(p+1) or faster (sliding, settled)
+    let dir = tempfile::tempdir().unwrap();
+    let meshes: Vec<PathBuf> = ["0.4", "0.2", "0.1"].iter().map(|h| gmsh_mesh(dir.path(), "triangle_meshes.py", "disk", &format!("disk_{h}.msh"), &["--size", h]).0).collect();
+    for p in 2..=4 {
+        let errors: Vec<f64> = meshes
+            .iter()
+            .map(|file| {
+                let (r, _) = curve(dir.path(), file, DISK, p);
+                assert!(r.quality.invalid_elements.is_empty() && r.quality.boundary_node_distance < 1e-12);
+                r.quality.boundary_error["wall"].samples
+            })
+            .collect();
+        for (k, w) in errors.windows(2).enumerate() {
+            let rate = (w[0] / w[1]).log2();
+            eprintln!("disk of triangles, p = {p}: h/{} → h/{}: error {:.3e} → {:.3e}, observed order {rate:.2}", 1 << k, 2 << k, w[0], w[1]);
+            assert!(rate >= p as f64 + 0.5, "p = {p}: observed order {rate:.2}");
+        }
+    }
+}
+
+#[test]
+fn a_tetrahedral_ball_in_a_box_curves_validly_at_p2_p3_and_gmsh_agrees() {
+    let dir = tempfile::tempdir().unwrap();
+    let sphere = |x: [f64; 3]| ((x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt() - 0.5).abs();
+    for (p, ty) in [(2, 11), (3, 29)] {
+        let (file, gmsh) = gmsh_mesh(dir.path(), "tet_meshes.py", "ballbox", "ballbox.msh", &["--size", "0.16", "--order", &p.to_string()]);
+        let gmsh = gmsh.unwrap();
+        let (r, out) = curve(dir.path(), &file, SPHERE_HALF, p);
+        assert_eq!(r.cells, gmsh["elements"].as_u64().unwrap() as usize);
+        assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        group_nodes_on::<3>(&out, "sphere", sphere, 1e-12);
+        let (det, sj) = gmsh_agrees_simplex::<3>(&out, ty, r.cells, 2e-3, 5e-3);
+        let ours = r.quality.boundary_error["sphere"].samples;
+        let theirs = gmsh["boundary_sample_distance"].as_f64().unwrap();
+        eprintln!(
+            "tet ball in a box p = {p}: {} tets, min det J {:.3e}, scaled Jacobian {:.4}; Gmsh setOrder {} invalid, min SJ {:.3}; sphere error {ours:.3e} vs Gmsh {theirs:.3e}; Gmsh agrees to {det:.1e} (det J), {sj:.1e} (SJ); {:.2} s vs {:.3} s",
+            r.cells, r.quality.min_det_j, r.quality.scaled_jacobian.min, gmsh["invalid"], gmsh["min_sj"], r.total_s, gmsh["seconds"].as_f64().unwrap()
+        );
+        assert!(ours <= 2.0 * theirs, "p = {p}: sphere error {ours:e} against Gmsh's {theirs:e}");
+    }
+}
+
+#[test]
+fn sliding_tetrahedra_converge_at_the_order_on_a_ball() {
+    let dir = tempfile::tempdir().unwrap();
+    let meshes: Vec<PathBuf> = ["0.5", "0.25"].iter().map(|h| gmsh_mesh(dir.path(), "tet_meshes.py", "ball", &format!("ball_{h}.msh"), &["--size", h, "--far", h]).0).collect();
+    for p in 2..=3 {
+        let errors: Vec<f64> = meshes
+            .iter()
+            .map(|file| {
+                let (r, _) = curve(dir.path(), file, SPHERE_ONE, p);
+                assert!(r.quality.invalid_elements.is_empty() && r.quality.boundary_node_distance < 1e-12);
+                r.quality.boundary_error["sphere"].samples
+            })
+            .collect();
+        let rate = (errors[0] / errors[1]).log2();
+        eprintln!("ball of tetrahedra, p = {p}: error {:.3e} → {:.3e}, observed order {rate:.2}", errors[0], errors[1]);
+        assert!(rate >= p as f64 + 0.5, "p = {p}: observed order {rate:.2}");
+    }
+}
