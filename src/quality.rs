@@ -40,18 +40,28 @@ pub fn corner_jacobians(p: &[Point2; 4]) -> [f64; 4] {
     })
 }
 
-/// Minimum over the corners of the sine of the corner angle; on a
-/// triangle divided by sin 60°, so that the equilateral triangle gives 1
-/// as the square does (Gmsh's scaled Jacobian of a linear triangle).
+/// Minimum over the corners of the sine of the corner angle of a quad;
+/// of a triangle, Gmsh's scaled Jacobian (`minSIGE`, the one the curved
+/// certificate gives: 1 for the equilateral triangle).
 pub fn scaled_jacobian<const N: usize>(p: &[Point2; N]) -> f64 {
-    let scale = if N == 3 { 2.0 / 3f64.sqrt() } else { 1.0 };
+    if N == 3 {
+        return simplex_scaled_jacobian(p);
+    }
     (0..N)
         .map(|a| {
             let (e1, e2) = corner_edges(p, a);
             let l = e1[0].hypot(e1[1]) * e2[0].hypot(e2[1]);
-            if l > 0.0 { scale * (e1[0] * e2[1] - e1[1] * e2[0]) / l } else { 0.0 }
+            if l > 0.0 { (e1[0] * e2[1] - e1[1] * e2[0]) / l } else { 0.0 }
         })
         .fold(f64::INFINITY, f64::min)
+}
+
+/// Gmsh's scaled Jacobian (`minSIGE`) of a linear triangle or
+/// tetrahedron: that of its constant Jacobian (columns: the edges from
+/// node 0), [`simplex::scaled_jacobian`].
+fn simplex_scaled_jacobian<const D: usize, const N: usize>(p: &[[f64; D]; N]) -> f64 {
+    let j: [[f64; D]; D] = std::array::from_fn(|r| std::array::from_fn(|c| p[c + 1][r] - p[0][r]));
+    simplex::scaled_jacobian(&j)
 }
 
 /// For each hex corner, the three nodes across its edges in right-handed
@@ -141,20 +151,10 @@ pub fn tet_mesh_quality(mesh: &TetMesh) -> MeshQuality {
     linear_quality(&mesh.cells, &mesh.nodes, |p| (tet_scaled_jacobian(p), cell_size(p)))
 }
 
-/// The least, over the corners of a linear tetrahedron, triple product of
-/// the unit edges leaving the corner, times √2 so that the regular
-/// tetrahedron gives 1 (Gmsh's scaled Jacobian of a linear tet); 0 for a
-/// collapsed edge.
+/// Gmsh's scaled Jacobian (`minSIGE`) of a linear tetrahedron: 1 for the
+/// regular one, as the curved certificate gives it.
 pub fn tet_scaled_jacobian(p: &[Point3; 4]) -> f64 {
-    // per corner, the other three in an order of the same orientation
-    const AT: [[usize; 4]; 4] = [[0, 1, 2, 3], [1, 0, 3, 2], [2, 3, 0, 1], [3, 2, 1, 0]];
-    AT.iter()
-        .map(|&[c, a, b, d]| {
-            let (e1, e2, e3) = (sub(p[a], p[c]), sub(p[b], p[c]), sub(p[d], p[c]));
-            let lengths = (dot(e1, e1) * dot(e2, e2) * dot(e3, e3)).sqrt();
-            if lengths > 0.0 { std::f64::consts::SQRT_2 * triple(e1, e2, e3) / lengths } else { 0.0 }
-        })
-        .fold(f64::INFINITY, f64::min)
+    simplex_scaled_jacobian(p)
 }
 
 /// Extremes over a set of values.

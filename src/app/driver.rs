@@ -288,7 +288,7 @@ impl<const N: usize> Outputs<2, N> for PlaneMesh<N> {
     const DEFINITIONS: Definitions = if N == 3 {
         Definitions {
             det_j: "determinant of the linear map from the reference triangle (0,0),(1,0),(0,1), constant on a cell (Gmsh's reference triangle is the same)",
-            scaled_jacobian: "per cell, min over corners of det J/(|e1||e2|) divided by sin 60 degrees: 1 for the equilateral triangle",
+            scaled_jacobian: "per cell, Gmsh's minSIGE: (2/sqrt 3) det J times the mean of 1/(|ei||ej|) over the edge pairs, the mean corner sine over sin 60 degrees: 1 for the equilateral triangle",
             jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (3-point rule, exact for quadratic f); 1 is perfect",
         }
     } else {
@@ -360,7 +360,7 @@ impl Outputs<3, 8> for HexMesh {
 impl Outputs<3, 4> for TetMesh {
     const DEFINITIONS: Definitions = Definitions {
         det_j: "determinant of the linear map from the reference tetrahedron (0,0,0),(1,0,0),(0,1,0),(0,0,1), constant on a cell (Gmsh's reference is the same)",
-        scaled_jacobian: "per cell, min over corners of the triple product of unit edge vectors times sqrt 2: 1 for the regular tetrahedron",
+        scaled_jacobian: "per cell, Gmsh's minSIGE: sqrt 2 det J times the mean of 1/(|ea||eb||ec|) over the 12 triples of two opposite edges and one other: 1 for the regular tetrahedron",
         jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (4-point rule, exact for quadratic f); 1 is perfect",
     };
     fn quality(&self) -> MeshQuality {

@@ -378,6 +378,11 @@ impl Ord for BoxItem {
 /// runs on the computed coefficients; the rounding bounds are applied to
 /// its result. For [`Goal::Sign`] the minimum is positive iff `lower > 0`.
 fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64, f64, usize) {
+    // a coordinate that is not finite leaves coefficients NaN, which the
+    // min and max folds would skip: no bound, never valid
+    if !poly.coef.iter().all(|c| c.is_finite()) || !err.is_finite() {
+        return (f64::NEG_INFINITY, f64::INFINITY, 0);
+    }
     let scale = poly.max_abs();
     // A split applies, per variable, rows of non-negative weights summing
     // to one (binomial / 2^k, exact): at most n + 2 roundings on terms
@@ -542,34 +547,9 @@ fn tensor<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> [[f64; D];
 /// `corners` in mesh order: [`Certifier::is_valid`] at `p = 1`.
 pub fn linear_is_valid<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> bool {
     if crate::lsfem::is_simplex(D, N) {
-        let (det, err) = simplex_det(corners);
-        return det > err;
+        return super::simplex::linear_simplex_is_valid(corners);
     }
     linear().is_valid(&tensor(corners))
-}
-
-/// `det J` of a linear triangle or tetrahedron (constant: the determinant
-/// of its edge vectors from node 0) and a bound on its rounding error.
-///
-/// Why the bound holds: each edge component `x_a − x_0` is one rounding
-/// (relative ε); the 2×2 determinant is two products and a difference, the
-/// 3×3 expansion three 2×2 minors times a component and two sums. With
-/// every operand off by at most its own relative ε, the computed value is
-/// within `(D + 3) ε Σ|terms|` of the exact one, `Σ|terms|` being the sum of
-/// the absolute products (Higham's γ_n for an n-term sum of products of
-/// D rounded factors, n ≤ 6, taken generously).
-pub fn simplex_det<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> (f64, f64) {
-    let e: [[f64; D]; D] = std::array::from_fn(|a| std::array::from_fn(|k| corners[a + 1][k] - corners[0][k]));
-    let eps = f64::EPSILON;
-    if D == 2 {
-        let (t1, t2) = (e[0][0] * e[1][1], e[0][1] * e[1][0]);
-        return (t1 - t2, 5.0 * eps * (t1.abs() + t2.abs()));
-    }
-    // rows are the edges: det = e0 · (e1 × e2)
-    let minor = |r: usize, s: usize| e[1][r] * e[2][s] - e[1][s] * e[2][r];
-    let terms = [e[0][0] * minor(1, 2), e[0][1] * minor(2, 0), e[0][2] * minor(0, 1)];
-    let size: f64 = [(0, 1, 2), (1, 2, 0), (2, 0, 1)].iter().map(|&(a, b, c)| (e[0][a] * e[1][b] * e[2][c]).abs() + (e[0][a] * e[1][c] * e[2][b]).abs()).sum();
-    (terms.iter().sum(), 6.0 * eps * size)
 }
 
 /// `(min, max)` of the Bernstein coefficients of `det J` of a linear cell
@@ -578,7 +558,9 @@ pub fn simplex_det<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> (
 /// the cell invalid (see [`linear_is_valid`] for the refined test).
 pub fn det_j_bounds<const D: usize, const N: usize>(corners: &[[f64; D]; N]) -> (f64, f64) {
     if crate::lsfem::is_simplex(D, N) {
-        let det = simplex_det(corners).0;
+        // constant on the cell: the determinant of its edges from node 0
+        let e: [[f64; D]; D] = std::array::from_fn(|r| std::array::from_fn(|c| corners[c + 1][r] - corners[0][r]));
+        let det = crate::mesh::element::basis::det(&e);
         return (det, det);
     }
     let (parts, _, s) = linear().det_j(&tensor(corners));
@@ -682,6 +664,21 @@ mod tests {
         (Bezier { deg: parts.det.deg, coef: parts.det.coef.iter().map(|&c| unit(c)).collect() }, unit(err))
     }
 
+
+    /// A NaN or infinite coordinate gives no bound: not valid, linear or
+    /// curved (the min and max of the coefficients skipped NaN, and such
+    /// an element was certified valid).
+    #[test]
+    fn non_finite_coordinates_are_not_valid() {
+        let mut hex = curved_hex(2, Spacing::Equispaced, 0.0, 1);
+        hex[4][1] = f64::NAN;
+        let c = certify(2, Spacing::Equispaced, &hex).unwrap();
+        assert!(!c.valid && c.min_det_lower == f64::NEG_INFINITY, "{c:?}");
+        let mut cube: [[f64; 3]; 8] = std::array::from_fn(|a| std::array::from_fn(|d| crate::lsfem::q1_corner(a, d)));
+        assert!(linear_is_valid(&cube));
+        cube[3][2] = f64::INFINITY;
+        assert!(!linear_is_valid(&cube));
+    }
     #[test]
     fn bezier_det_matches_the_map_everywhere() {
         let mut seed = 7u64;

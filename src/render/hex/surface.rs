@@ -174,6 +174,7 @@ impl Corners {
         &self.nodes[c * self.per_cell..(c + 1) * self.per_cell]
     }
 
+    /// The corners of each cell in turn.
     fn cells(&self) -> impl Iterator<Item = &[usize]> {
         self.nodes.chunks_exact(self.per_cell)
     }
