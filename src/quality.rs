@@ -21,7 +21,7 @@ pub mod simplex;
 
 use crate::jacobian::{lift, JacobianField, Normalisation};
 use crate::lsfem::{cell_quadrature, q1_eval};
-use crate::mesh::{HexMesh, PlaneMesh, Point2, Point3, TetMesh};
+use crate::mesh::{HexMesh, PlaneMesh, Point2, Point3, SolidMesh, TetMesh};
 use crate::numeric::{dot, scale, sub, triple};
 use certify::{det_j_bounds, invalid_cells};
 use rayon::prelude::*;
@@ -142,13 +142,28 @@ fn linear_quality<const D: usize, const N: usize>(
 /// Bézier coefficients of each cell, Verdict's hex scaled Jacobian,
 /// volumes, and the cells that are not certified valid.
 pub fn hex_mesh_quality(mesh: &HexMesh) -> MeshQuality {
-    linear_quality(&mesh.cells, &mesh.nodes, |p| (hex_scaled_jacobian(p), cell_size(p)))
+    solid_mesh_quality(mesh)
 }
 
 /// [`hex_mesh_quality`] of a tetrahedral mesh, with
 /// [`tet_scaled_jacobian`].
 pub fn tet_mesh_quality(mesh: &TetMesh) -> MeshQuality {
-    linear_quality(&mesh.cells, &mesh.nodes, |p| (tet_scaled_jacobian(p), cell_size(p)))
+    solid_mesh_quality(mesh)
+}
+
+/// [`hex_mesh_quality`] or [`tet_mesh_quality`], by the kind of cell.
+pub fn solid_mesh_quality<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>) -> MeshQuality {
+    linear_quality(&mesh.cells, &mesh.nodes, |p| (solid_scaled_jacobian(p), cell_size(p)))
+}
+
+/// The scaled Jacobian of a linear hex ([`hex_scaled_jacobian`]) or
+/// tetrahedron ([`tet_scaled_jacobian`]).
+pub fn solid_scaled_jacobian<const N: usize>(p: &[Point3; N]) -> f64 {
+    if N == 4 {
+        simplex_scaled_jacobian(p)
+    } else {
+        hex_scaled_jacobian(&std::array::from_fn(|k| p[k]))
+    }
 }
 
 /// Gmsh's scaled Jacobian (`minSIGE`) of a linear tetrahedron: 1 for the

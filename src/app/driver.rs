@@ -14,8 +14,8 @@ use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
-use crate::mesh::{polygon_area, HexMesh, PlaneMesh, Point2, Point3, SolidMesh, TetMesh};
-use crate::quality::{hex_mesh_quality, jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
+use crate::mesh::{polygon_area, PlaneMesh, Point2, Point3, SolidMesh};
+use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -325,49 +325,30 @@ impl<const N: usize> Outputs<2, N> for PlaneMesh<N> {
     }
 }
 
-impl Outputs<3, 8> for HexMesh {
-    const DEFINITIONS: Definitions = Definitions {
-        det_j: "determinant of the trilinear map from the reference cube [0,1]^3, bounded by its Bezier coefficients (Gmsh's [-1,1]^3 gives 1/8 of it)",
-        scaled_jacobian: "per cell, Verdict's hex scaled Jacobian: min over corners (and centre axes) of the triple product of unit edge vectors",
-        jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2x2 Gauss); 1 is perfect",
+/// Hexes and tetrahedra share the solid outputs; only the words of the
+/// figures differ.
+impl<const N: usize, const K: usize> Outputs<3, N> for SolidMesh<N, K>
+where
+    SolidMesh<N, K>: Q1Mesh<3, N> + Subdividable<3, N>,
+{
+    const DEFINITIONS: Definitions = if N == 4 {
+        Definitions {
+            det_j: "determinant of the linear map from the reference tetrahedron (0,0,0),(1,0,0),(0,1,0),(0,0,1), constant on a cell (Gmsh's reference is the same)",
+            scaled_jacobian: "per cell, Gmsh's minSIGE: sqrt 2 det J times the mean of 1/(|ea||eb||ec|) over the 12 triples of two opposite edges and one other: 1 for the regular tetrahedron",
+            jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (4-point rule, exact for quadratic f); 1 is perfect",
+        }
+    } else {
+        Definitions {
+            det_j: "determinant of the trilinear map from the reference cube [0,1]^3, bounded by its Bezier coefficients (Gmsh's [-1,1]^3 gives 1/8 of it)",
+            scaled_jacobian: "per cell, Verdict's hex scaled Jacobian: min over corners (and centre axes) of the triple product of unit edge vectors",
+            jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (2x2x2 Gauss); 1 is perfect",
+        }
     };
     fn quality(&self) -> MeshQuality {
-        hex_mesh_quality(self)
+        crate::quality::solid_mesh_quality(self)
     }
     fn scaled_jacobians(&self) -> Vec<f64> {
-        (0..self.num_cells()).map(|c| crate::quality::hex_scaled_jacobian(&self.cell_coords(c))).collect()
-    }
-    fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
-        self.cells.iter().map(|c| crate::quality::cell_size(&c.map(|n| nodes[n]))).collect()
-    }
-    fn msh(&self) -> String {
-        hex_msh_string(self)
-    }
-    fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
-        hex_vtu_string(self, cell_data, &[])
-    }
-    fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        Self::draw_curved(&CurvedMesh { nodes: nodes.to_vec(), ..CurvedMesh::from_hexes(self) }, values, look)
-    }
-    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
-        curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
-    }
-    fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        render_hexes(mesh, values, &options3(look))
-    }
-}
-
-impl Outputs<3, 4> for TetMesh {
-    const DEFINITIONS: Definitions = Definitions {
-        det_j: "determinant of the linear map from the reference tetrahedron (0,0,0),(1,0,0),(0,1,0),(0,0,1), constant on a cell (Gmsh's reference is the same)",
-        scaled_jacobian: "per cell, Gmsh's minSIGE: sqrt 2 det J times the mean of 1/(|ea||eb||ec|) over the 12 triples of two opposite edges and one other: 1 for the regular tetrahedron",
-        jf: "per cell, |K_t| / integral over K_0 of f(phi(xi)) dxi (4-point rule, exact for quadratic f); 1 is perfect",
-    };
-    fn quality(&self) -> MeshQuality {
-        crate::quality::tet_mesh_quality(self)
-    }
-    fn scaled_jacobians(&self) -> Vec<f64> {
-        (0..self.num_cells()).map(|c| crate::quality::tet_scaled_jacobian(&self.cell_coords(c))).collect()
+        (0..self.num_cells()).map(|c| crate::quality::solid_scaled_jacobian(&self.cell_coords(c))).collect()
     }
     fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
         self.cells.iter().map(|c| crate::quality::cell_size(&c.map(|n| nodes[n]))).collect()

@@ -8,7 +8,8 @@ HighOrderElastic (Mesh.HighOrderOptimize 4 / 3), timed; prints JSON
 {"method", "order", "elements", "invalid" (3D elements with minDetJac <= 0),
 "min_sj" (Gmsh's bound), "boundary_sample_distance" (the largest
 off_shape(points) of 17 x 17 points per quad face of the given surfaces),
-"seconds"}, or {"method", "error"} and exit status 1 when Gmsh throws."""
+"seconds"}, or {"method", "error"} and exit status 1 when Gmsh throws.
+curve_and_judge_simplices: the same for triangle and tetrahedral meshes."""
 import json, time
 import gmsh
 
@@ -43,4 +44,40 @@ def curve_and_judge(p, method, surfaces, off_shape):
         pts = np.einsum("qn,enc->eqc", bf, x[nodes])
         worst = max(worst, float(off_shape(pts).max()))
     print(json.dumps({"method": method, "order": p, "elements": len(tags), "invalid": int((dj <= 0).sum()),
+                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
+
+
+def curve_and_judge_simplices(p, method, dim, curves, off_shape):
+    """curve_and_judge for a mesh of triangles (dim 2: `curves` are the
+    wall's curves, each line sampled at 17 points) or tetrahedra (dim 3:
+    `curves` are the wall's surfaces, each triangle sampled on the lattice
+    of 17 points per edge); off_shape(points) the distance to the wall."""
+    import numpy as np
+
+    t0 = time.perf_counter()
+    gmsh.model.mesh.setOrder(p)
+    if method != "setorder":
+        gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if method == "fastcurving" else 3)
+        gmsh.model.mesh.optimize("HighOrderFastCurving" if method == "fastcurving" else "HighOrderElastic")
+    secs = time.perf_counter() - t0
+    tags = np.concatenate(gmsh.model.mesh.getElements(dim)[1])
+    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
+    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+    m = 16
+    if dim == 2:
+        ft = gmsh.model.mesh.getElementType("Line", p)
+        uvw = [c for k in range(m + 1) for c in (-1 + 2 * k / m, 0, 0)]
+    else:
+        ft = gmsh.model.mesh.getElementType("Triangle", p)
+        uvw = [c for j in range(m + 1) for i in range(m + 1 - j) for c in (i / m, j / m, 0)]
+    bf = np.reshape(gmsh.model.mesh.getBasisFunctions(ft, uvw, "Lagrange")[1], (len(uvw) // 3, -1))
+    nt, xyz, _ = gmsh.model.mesh.getNodes()
+    x = np.zeros((int(nt.max()) + 1, 3))
+    x[nt] = np.reshape(xyz, (-1, 3))
+    worst = 0.0
+    for c in curves:
+        nodes = np.reshape(gmsh.model.mesh.getElementsByType(ft, c)[1], (-1, bf.shape[1]))
+        pts = np.einsum("qn,enc->eqc", bf, x[nodes])
+        worst = max(worst, float(off_shape(pts).max()))
+    print(json.dumps({"method": method, "order": p, "elements": int(len(tags)), "invalid": int((dj <= 0).sum()),
                       "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))

@@ -14,7 +14,7 @@ distance of the sphere's triangles, sampled on a lattice of 17 points per
 edge, to the sphere), "seconds"}.
 
 Usage: python tet_meshes.py KIND OUT.msh [--size S] [--far F] [--order P] [--method M]"""
-import argparse, json, time
+import argparse
 import gmsh
 
 ap = argparse.ArgumentParser()
@@ -61,29 +61,7 @@ gmsh.model.mesh.generate(3)
 gmsh.write(a.out)
 if a.order:
     import numpy as np
+    from gmsh_curving import curve_and_judge_simplices
 
-    p = a.order
-    t0 = time.perf_counter()
-    gmsh.model.mesh.setOrder(p)
-    if a.method != "setorder":
-        gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if a.method == "fastcurving" else 3)
-        gmsh.model.mesh.optimize("HighOrderFastCurving" if a.method == "fastcurving" else "HighOrderElastic")
-    secs = time.perf_counter() - t0
-    tags = np.concatenate(gmsh.model.mesh.getElements(3)[1])
-    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
-    tt = gmsh.model.mesh.getElementType("Triangle", p)
-    m = 16
-    uvw = [c for j in range(m + 1) for i in range(m + 1 - j) for c in (i / m, j / m, 0)]
-    bf = np.reshape(gmsh.model.mesh.getBasisFunctions(tt, uvw, "Lagrange")[1], (len(uvw) // 3, -1))
-    nt, xyz, _ = gmsh.model.mesh.getNodes()
-    x = np.zeros((int(nt.max()) + 1, 3))
-    x[nt] = np.reshape(xyz, (-1, 3))
-    worst = 0.0
-    for s in sphere:
-        nodes = np.reshape(gmsh.model.mesh.getElementsByType(tt, s)[1], (-1, bf.shape[1]))
-        pts = np.einsum("qn,enc->eqc", bf, x[nodes])
-        worst = max(worst, float(np.abs(np.linalg.norm(pts, axis=2) - r).max()))
-    print(json.dumps({"method": a.method, "order": p, "elements": int(len(tags)), "invalid": int((dj <= 0).sum()),
-                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
+    curve_and_judge_simplices(a.order, a.method, 3, sphere, lambda pts: np.abs(np.linalg.norm(pts, axis=2) - r))
 gmsh.finalize()

@@ -16,7 +16,7 @@ distance of 17 points per wall edge to the circle), "seconds"}.
 
 Usage: python triangle_meshes.py KIND OUT.msh [--first H] [--size S] [--far F]
        [--order P] [--method M]"""
-import argparse, json, math, time
+import argparse, math
 import gmsh
 
 ap = argparse.ArgumentParser()
@@ -60,28 +60,7 @@ gmsh.model.mesh.generate(2)
 gmsh.write(a.out)
 if a.order:
     import numpy as np
+    from gmsh_curving import curve_and_judge_simplices
 
-    p = a.order
-    t0 = time.perf_counter()
-    gmsh.model.mesh.setOrder(p)
-    if a.method != "setorder":
-        gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if a.method == "fastcurving" else 3)
-        gmsh.model.mesh.optimize("HighOrderFastCurving" if a.method == "fastcurving" else "HighOrderElastic")
-    secs = time.perf_counter() - t0
-    tags = np.concatenate(gmsh.model.mesh.getElements(2)[1])
-    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
-    lt = gmsh.model.mesh.getElementType("Line", p)
-    uvw = [c for k in range(17) for c in (-1 + k / 8, 0, 0)]
-    bf = np.reshape(gmsh.model.mesh.getBasisFunctions(lt, uvw, "Lagrange")[1], (17, -1))
-    nt, xyz, _ = gmsh.model.mesh.getNodes()
-    x = np.zeros((int(nt.max()) + 1, 3))
-    x[nt] = np.reshape(xyz, (-1, 3))
-    worst = 0.0
-    for arc in arcs:
-        nodes = np.reshape(gmsh.model.mesh.getElementsByType(lt, arc)[1], (-1, bf.shape[1]))
-        pts = np.einsum("qn,enc->eqc", bf, x[nodes])
-        worst = max(worst, float(np.abs(np.hypot(pts[..., 0], pts[..., 1]) - r).max()))
-    print(json.dumps({"method": a.method, "order": p, "elements": int(len(tags)), "invalid": int((dj <= 0).sum()),
-                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
+    curve_and_judge_simplices(a.order, a.method, 2, arcs, lambda pts: np.abs(np.hypot(pts[..., 0], pts[..., 1]) - r))
 gmsh.finalize()
