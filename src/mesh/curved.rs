@@ -1,5 +1,6 @@
-//! The mesh of any order: order-`p` Lagrange quads (`D = 2`) or hexes
-//! (`D = 3`) with their nodes in tensor order ([`super::element`]), and
+//! The mesh of any order: order-`p` Lagrange quads or triangles (`D = 2`),
+//! hexes or tetrahedra (`D = 3`), with their nodes in tensor order or the
+//! simplex lattice order ([`super::element`]), and
 //! boundary elements of dimension `D − 1` in named parts. A linear mesh is
 //! the case `p = 1` ([`CurvedMesh::from_quads`], [`CurvedMesh::from_hexes`]),
 //! which is how the file writers take meshes of any order.

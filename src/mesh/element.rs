@@ -1,6 +1,8 @@
-//! Lagrange quadrilaterals and hexahedra of order 1..=4, as data of the
-//! element: 1-D node sets, tensor-product bases and maps ([`basis`]), and
-//! the node orders of Gmsh and VTK ([`order`]). The mesh of any order
+//! Lagrange elements of order 1..=4 as data: the reference shapes of every
+//! kind ([`shape`]), for quadrilaterals and hexahedra the 1-D node sets,
+//! tensor-product bases and maps ([`basis`]) and the node orders of Gmsh
+//! and VTK ([`order`]), for triangles and tetrahedra their lattices,
+//! spaces and node orders ([`simplex`]). The mesh of any order
 //! ([`super::curved`]), its readers and writers and Algorithm 3 all use
 //! them, so they sit with the mesh, below all of those.
 //!
