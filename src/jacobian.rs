@@ -472,16 +472,14 @@ pub fn facet_flux_points<'a, const D: usize, const K: usize>(
     facets.flat_map(move |f| {
         let (p, w) = (f.map(|n| nodes[n]), f.map(|n| velocity[n]));
         (0..K).map(move |k| {
-            // the facet's shape functions at quadrature point k
+            // quadrature point k and the facet's shape functions there
+            let [xi, eta] = if K == 3 { TRIANGLE_POINTS[k] } else { [GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 }] };
             let n: [f64; 4] = if K == 3 {
-                let [xi, eta] = TRIANGLE_POINTS[k];
                 [1.0 - xi - eta, xi, eta, 0.0]
             } else {
-                let (xi, eta) = (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 });
                 [(1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), xi * eta, (1.0 - xi) * eta]
             };
             let at = |q: &[[f64; D]; K]| -> [f64; D] { std::array::from_fn(|i| (0..K).map(|a| n[a] * q[a][i]).sum()) };
-            let (xi, eta) = if K == 3 { (0.0, 0.0) } else { (GAUSS[k & 1], if K == 4 { GAUSS[k >> 1] } else { 0.0 }) };
             (at(&p), dot(at(&w), weighted_normal(&p, xi, eta)))
         })
     })
@@ -491,8 +489,8 @@ pub fn facet_flux_points<'a, const D: usize, const K: usize>(
 const TRIANGLE_POINTS: [[f64; 2]; 3] = [[1.0 / 6.0, 1.0 / 6.0], [2.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 2.0 / 3.0]];
 
 /// n dS at (ξ, η) of a facet times its quadrature weight (1/2 on an edge,
-/// 1/4 on a bilinear face, 1/6 on a flat triangle): the tangent turned
-/// clockwise, or ∂x/∂ξ × ∂x/∂η.
+/// 1/4 on a bilinear face, 1/6 on a flat triangle, whose n dS is the same
+/// at every point): the tangent turned clockwise, or ∂x/∂ξ × ∂x/∂η.
 fn weighted_normal<const D: usize, const K: usize>(p: &[[f64; D]; K], xi: f64, eta: f64) -> [f64; D] {
     let mut n = [0.0; D];
     match (&p[..], &mut n[..]) {

@@ -971,7 +971,7 @@ fn corner_positions(shape: Shape, p: usize) -> Vec<usize> {
     let n1 = p + 1;
     match shape {
         Shape::Line => vec![0, p],
-        Shape::Triangle => vec![0, p, n1 * (n1 + 1) / 2 - 1],
+        Shape::Triangle => crate::mesh::element::simplex::vertex_nodes(shape, p),
         _ => vec![0, p, n1 * n1 - 1, n1 * p],
     }
 }

@@ -489,10 +489,7 @@ fn apply(m: &[f64; 12], x: [f64; 3]) -> [f64; 3] {
 fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
     let d = shape.dim();
     if shape.is_simplex() && d >= 2 {
-        // vertex 0 at the origin, vertex k + 1 at p along axis k
-        let lattice = simplex::lattice(shape, p);
-        let vertex = |v: usize| -> [usize; 3] { std::array::from_fn(|k| if v == k + 1 { p } else { 0 }) };
-        return (0..=d).map(|v| lattice.iter().position(|l| *l == vertex(v)).expect("the vertices are lattice nodes")).collect();
+        return simplex::vertex_nodes(shape, p);
     }
     (0..1usize << d).map(|bits| (0..d).map(|k| ((bits >> k) & 1) * p * (p + 1).pow(k as u32)).sum()).collect()
 }

@@ -14,24 +14,36 @@ import json, time
 import gmsh
 
 
-def curve_and_judge(p, method, surfaces, off_shape):
-    # numpy only now: imported before the mesh is generated, it changes
-    # Gmsh's element connectivity (pointer-ordered sets)
-    import numpy as np
-
+def _curve(p, method):
+    """setOrder(p), then the optimiser of `method`; the seconds both took.
+    Prints {"method", "error"} and exits 1 when Gmsh throws."""
     try:
         t0 = time.perf_counter()
         gmsh.model.mesh.setOrder(p)
         if method != "setorder":
             gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if method == "fastcurving" else 3)
             gmsh.model.mesh.optimize("HighOrderFastCurving" if method == "fastcurving" else "HighOrderElastic")
-        secs = time.perf_counter() - t0
+        return time.perf_counter() - t0
     except Exception as e:
         print(json.dumps({"method": method, "error": str(e)}))
         raise SystemExit(1)
-    tags = np.concatenate(gmsh.model.mesh.getElements(3)[1])
-    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+
+
+def _qualities(dim):
+    """The tags of the elements of dimension dim, their minDetJac and minSJ."""
+    import numpy as np
+
+    tags = np.concatenate(gmsh.model.mesh.getElements(dim)[1])
+    return tags, np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac")), np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+
+
+def curve_and_judge(p, method, surfaces, off_shape):
+    # numpy only now: imported before the mesh is generated, it changes
+    # Gmsh's element connectivity (pointer-ordered sets)
+    import numpy as np
+
+    secs = _curve(p, method)
+    tags, dj, sj = _qualities(3)
     qt = gmsh.model.mesh.getElementType("Quadrangle", p)
     uv = [c for i in range(17) for j in range(17) for c in (-1 + i / 8, -1 + j / 8, 0)]
     bf = np.reshape(gmsh.model.mesh.getBasisFunctions(qt, uv, "Lagrange")[1], (289, -1))
@@ -54,15 +66,8 @@ def curve_and_judge_simplices(p, method, dim, curves, off_shape):
     of 17 points per edge); off_shape(points) the distance to the wall."""
     import numpy as np
 
-    t0 = time.perf_counter()
-    gmsh.model.mesh.setOrder(p)
-    if method != "setorder":
-        gmsh.option.setNumber("Mesh.HighOrderOptimize", 4 if method == "fastcurving" else 3)
-        gmsh.model.mesh.optimize("HighOrderFastCurving" if method == "fastcurving" else "HighOrderElastic")
-    secs = time.perf_counter() - t0
-    tags = np.concatenate(gmsh.model.mesh.getElements(dim)[1])
-    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+    secs = _curve(p, method)
+    tags, dj, sj = _qualities(dim)
     m = 16
     if dim == 2:
         ft = gmsh.model.mesh.getElementType("Line", p)

@@ -99,6 +99,12 @@ pub fn lattice_index(shape: Shape, p: usize, m: [usize; 3]) -> usize {
     (count(3, p) - count(3, q)) + (count(2, q) - count(2, q - j)) + i
 }
 
+/// The positions in [`lattice`]`(shape, p)` of the vertices of `shape`, in
+/// the shape's vertex order.
+pub fn vertex_nodes(shape: Shape, p: usize) -> Vec<usize> {
+    (0..shape.vertices().len()).map(|v| lattice_index(shape, p, vertex_point(shape, p, v))).collect()
+}
+
 /// The barycentric index `(p − i − j − k, i, j, k)` of multi-index `m`.
 fn barycentric(m: [usize; 3], p: usize) -> [usize; 4] {
     [p - m[0] - m[1] - m[2], m[0], m[1], m[2]]

@@ -143,13 +143,7 @@ impl Corners {
     pub fn of(mesh: &CurvedMesh<3>) -> Corners {
         let p = mesh.p;
         let local: Vec<usize> = match mesh.shape {
-            Shape::Tetrahedron => {
-                let vertices = Shape::Tetrahedron.vertices();
-                vertices
-                    .iter()
-                    .map(|v| lattice_index(mesh.shape, p, v.map(|x| x as usize * p)))
-                    .collect()
-            }
+            Shape::Tetrahedron => simplex::vertex_nodes(mesh.shape, p),
             _ => {
                 let q = p + 1;
                 HEX_CORNERS
