@@ -29,7 +29,7 @@
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
 use crate::mesh::element::{nodes_1d, simplex, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, PlaneMesh, TetMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, PlaneCell, PlaneMesh, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use std::collections::HashMap;
 
@@ -122,6 +122,23 @@ pub struct Subdivision<M, const D: usize> {
     /// Per fine node inside a coarse edge (3D): the facets holding it and
     /// its parameters on each.
     on_facets: HashMap<usize, Vec<(usize, [f64; 2])>>,
+}
+
+impl<M, const D: usize> Subdivision<M, D> {
+    /// The kind of coarse element `e`, told by its node count (a mixed
+    /// mesh holds quads and triangles).
+    pub fn element_shape(&self, e: usize) -> Shape {
+        Shape::with_nodes(D, self.p, self.elements[e].len()).unwrap_or(self.shape)
+    }
+
+    /// The kinds of its elements, in the order of [`Shape`].
+    pub fn shapes(&self) -> Vec<Shape> {
+        let mut out: Vec<Shape> = (0..self.elements.len()).map(|e| self.element_shape(e)).collect();
+        out.push(self.shape);
+        out.sort();
+        out.dedup();
+        out
+    }
 }
 
 /// A topological name for a fine node, the same from every coarse cell
@@ -290,6 +307,12 @@ fn orientation(q: &[usize], f: &[usize]) -> Option<bool> {
 /// orientation of the geometry's curves, which may run either way), and
 /// checked to cover the whole boundary.
 fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: &M) -> Result<Vec<(Vec<usize>, usize)>, SubdivideError> {
+    orient_facets(coarse.cells().iter().map(|c| cell_facets::<D, N>(c)), coarse.facets(), coarse.names())
+}
+
+/// [`oriented_facets`] from every cell's outward facets (`cell_facets`),
+/// the boundary facets and the part names.
+fn orient_facets(cell_facets: impl Iterator<Item = Vec<Vec<usize>>>, facets: Vec<(Vec<usize>, usize)>, names: &[String]) -> Result<Vec<(Vec<usize>, usize)>, SubdivideError> {
     let key = |f: &[usize]| {
         let mut k = f.to_vec();
         k.sort_unstable();
@@ -298,17 +321,15 @@ fn oriented_facets<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse
     // every cell facet, by its node set: how many cells hold it, and one of
     // them in outward order
     let mut owners: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
-    for cell in coarse.cells() {
-        for f in cell_facets::<D, N>(cell) {
-            owners.entry(key(&f)).and_modify(|o| o.0 += 1).or_insert((1, f));
-        }
+    for f in cell_facets.flatten() {
+        owners.entry(key(&f)).and_modify(|o| o.0 += 1).or_insert((1, f));
     }
     let mut covered = std::collections::HashSet::new();
     let mut out = Vec::new();
-    for (index, (q, part)) in coarse.facets().into_iter().enumerate() {
+    for (index, (q, part)) in facets.into_iter().enumerate() {
         let k = key(&q);
         let outward = owners.get(&k).and_then(|(n, f)| orientation(&q, f).map(|same| (same, f, *n)));
-        let name = |part: usize| coarse.names().get(part).cloned().unwrap_or_else(|| format!("#{part}"));
+        let name = |part: usize| names.get(part).cloned().unwrap_or_else(|| format!("#{part}"));
         let Some((same, f, owners)) = outward else {
             return Err(SubdivideError::NotACellFacet { index, nodes: q, part: name(part) });
         };
@@ -342,8 +363,94 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
     } else {
         tensor_elements(coarse, &t, &mut ids, &mut nodes)
     };
+    let b = boundary_places(coarse.nodes(), coarse_facets, &ids, nodes.len(), p, &t, spacing);
+    let fine = M::assemble(nodes, sub_cells, b.fine_facets, coarse.names().to_vec());
+    let shape = linear_shape::<D, N>();
+    let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
+    Ok(Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets })
+}
+
+/// Splits a mixed mesh of quads and triangles as [`subdivide`] does,
+/// every element at its own kind's nodes (their edges carry the same 1D
+/// nodes, so neighbours of either kind share them). Algorithm 2's mesh is
+/// of triangles: each of a quad's p² Q1 sub-cells is cut along its
+/// shorter diagonal, so one P1 system serves both kinds (the elements
+/// stay order-p quads; only the flow that places their nodes runs on
+/// triangles). Returns, per fine cell, the coarse cell it lies in.
+pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> Result<(Subdivision<TriMesh, 2>, Vec<usize>), SubdivideError> {
+    let t = nodes_1d(p, spacing).map_err(|_| SubdivideError::Order(p))?;
+    let facets = coarse.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
+    let per_cell = coarse.cells.iter().map(|c| {
+        let n = c.nodes();
+        (0..n.len()).map(|k| vec![n[k], n[(k + 1) % n.len()]]).collect()
+    });
+    let coarse_facets = orient_facets(per_cell, facets, &coarse.part_names)?;
+    let space = simplex::space(Shape::Triangle, p, spacing).map_err(|_| SubdivideError::Order(p))?;
+    let lattice = simplex::lattice(Shape::Triangle, p);
+    let subs = simplex::sub_simplices(Shape::Triangle, p);
+    let mut ids: HashMap<Key, usize> = HashMap::new();
+    let mut nodes: Vec<[f64; 2]> = Vec::new();
+    let (mut elements, mut sub_cells, mut owner) = (Vec::with_capacity(coarse.cells.len()), Vec::new(), Vec::new());
+    for (c, cell) in coarse.cells.iter().enumerate() {
+        let before = sub_cells.len();
+        match cell {
+            PlaneCell::Quad(q) => {
+                let el = tensor_element::<2, 4>(c, q, &coarse.nodes, &t, &mut ids, &mut nodes);
+                for sub in tensor_sub_cells::<2, 4>(&el, p) {
+                    sub_cells.extend(split_quad(sub, &nodes));
+                }
+                elements.push(el);
+            }
+            PlaneCell::Triangle(tri) => {
+                let el = simplex_element::<2, 3>(c, tri, &coarse.nodes, (&lattice, &space.nodes, p), &mut ids, &mut nodes);
+                sub_cells.extend(subs.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
+                elements.push(el);
+            }
+        }
+        owner.resize(owner.len() + sub_cells.len() - before, c);
+    }
+    let b = boundary_places(&coarse.nodes, coarse_facets, &ids, nodes.len(), p, &t, spacing);
+    let fine = TriMesh::assemble(nodes, sub_cells, b.fine_facets, coarse.part_names.clone());
+    let shape = coarse.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
+    let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
+    Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
+}
+
+/// The two triangles of a convex Q1 sub-cell (corners counter-clockwise),
+/// cut along its shorter diagonal: the better angles of the two cuts.
+fn split_quad(q: [usize; 4], nodes: &[[f64; 2]]) -> [[usize; 3]; 2] {
+    if dist2(nodes[q[0]], nodes[q[2]]) <= dist2(nodes[q[1]], nodes[q[3]]) {
+        [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+    } else {
+        [[q[0], q[1], q[3]], [q[1], q[2], q[3]]]
+    }
+}
+
+/// Where the boundary's fine nodes sit on the coarse boundary, and the
+/// fine boundary facets ([`Subdivision`]'s boundary fields).
+struct Boundary<const D: usize> {
+    places: Vec<Place>,
+    facets: Vec<(Vec<usize>, usize)>,
+    fine_facets: Vec<(Vec<usize>, usize)>,
+    facet_corners: Vec<Vec<[f64; D]>>,
+    edges: Vec<([[f64; D]; 2], Vec<usize>)>,
+    on_facets: HashMap<usize, Vec<(usize, [f64; 2])>>,
+    coarse_nodes: Vec<usize>,
+}
+
+/// The boundary fields of a subdivision whose `count` fine nodes are
+/// named by `ids`, from the oriented coarse facets.
+fn boundary_places<const D: usize>(
+    coarse_nodes_at: &[[f64; D]],
+    coarse_facets: Vec<(Vec<usize>, usize)>,
+    ids: &HashMap<Key, usize>,
+    count: usize,
+    p: usize,
+    t: &[f64],
+    spacing: Spacing,
+) -> Boundary<D> {
     let n1 = p + 1;
-    let mut places = vec![Place::Interior; nodes.len()];
+    let mut places = vec![Place::Interior; count];
     let mut facets = Vec::new();
     let mut fine_facets = Vec::new();
     let mut facet_corners = Vec::new();
@@ -360,7 +467,7 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
                 Key::Vertex(_) => Place::Vertex,
                 Key::Edge(a, b, k) if D == 3 => {
                     let e = *edge_ids.entry((a, b)).or_insert_with(|| {
-                        edges.push(([coarse.nodes()[a], coarse.nodes()[b]], Vec::new()));
+                        edges.push(([coarse_nodes_at[a], coarse_nodes_at[b]], Vec::new()));
                         edges.len() - 1
                     });
                     if !edges[e].1.contains(&f) {
@@ -389,18 +496,16 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
                 }
             }
         }
-        facet_corners.push(q.iter().map(|&n| coarse.nodes()[n]).collect());
+        facet_corners.push(q.iter().map(|&n| coarse_nodes_at[n]).collect());
         facets.push((grid, part));
     }
-    let coarse_nodes: Vec<usize> = (0..coarse.nodes().len()).map(|n| ids.get(&Key::Vertex(n)).copied().unwrap_or(usize::MAX)).collect();
+    let coarse_nodes: Vec<usize> = (0..coarse_nodes_at.len()).map(|n| ids.get(&Key::Vertex(n)).copied().unwrap_or(usize::MAX)).collect();
     // every coarse node stays, the interior ones too: the elements keep
     // the coarse vertices, so a thin first layer keeps its height there
     for &n in coarse_nodes.iter().filter(|&&n| n != usize::MAX) {
         places[n] = Place::Vertex;
     }
-    let fine = M::assemble(nodes, sub_cells, fine_facets, coarse.names().to_vec());
-    let shape = linear_shape::<D, N>();
-    Ok(Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets })
+    Boundary { places, facets, fine_facets, facet_corners, edges, on_facets, coarse_nodes }
 }
 
 /// The fine nodes of every tensor cell (in tensor order), made or found
@@ -412,31 +517,35 @@ fn tensor_elements<M: Subdividable<D, N>, const D: usize, const N: usize>(
     nodes: &mut Vec<[f64; D]>,
 ) -> (Vec<Vec<usize>>, Vec<[usize; N]>) {
     let p = t.len() - 1;
-    let mut elements = Vec::with_capacity(coarse.cells().len());
-    for (c, cell) in coarse.cells().iter().enumerate() {
-        let corners = cell.map(|n| coarse.nodes()[n]);
-        let element: Vec<usize> = tensor_indices::<D>(p)
-            .map(|idx| {
-                *ids.entry(cell_key::<D, N>(c, cell, idx, p)).or_insert_with(|| {
-                    let xi: [f64; D] = std::array::from_fn(|d| t[idx[d]]);
-                    nodes.push(at_reference(&corners, xi));
-                    nodes.len() - 1
-                })
-            })
-            .collect();
-        elements.push(element);
-    }
-    let n1 = p + 1;
-    let sub_cells: Vec<[usize; N]> = elements
-        .iter()
-        .flat_map(|el| {
-            tensor_indices::<D>(p - 1).map(move |idx| {
-                let at = |off: [usize; D]| el[(0..D).map(|d| (idx[d] + off[d]) * n1.pow(d as u32)).sum::<usize>()];
-                std::array::from_fn(|a| at(std::array::from_fn(|d| usize::from(crate::lsfem::q1_corner(a, d) == 1.0))))
+    let elements: Vec<Vec<usize>> = coarse.cells().iter().enumerate().map(|(c, cell)| tensor_element(c, cell, coarse.nodes(), t, ids, nodes)).collect();
+    let sub_cells = elements.iter().flat_map(|el| tensor_sub_cells::<D, N>(el, p)).collect();
+    (elements, sub_cells)
+}
+
+/// The fine nodes of tensor cell `c` with corners `cell` (tensor order),
+/// made or found by their keys.
+fn tensor_element<const D: usize, const N: usize>(c: usize, cell: &[usize; N], at: &[[f64; D]], t: &[f64], ids: &mut HashMap<Key, usize>, nodes: &mut Vec<[f64; D]>) -> Vec<usize> {
+    let p = t.len() - 1;
+    let corners = cell.map(|n| at[n]);
+    tensor_indices::<D>(p)
+        .map(|idx| {
+            *ids.entry(cell_key::<D, N>(c, cell, idx, p)).or_insert_with(|| {
+                let xi: [f64; D] = std::array::from_fn(|d| t[idx[d]]);
+                nodes.push(at_reference(&corners, xi));
+                nodes.len() - 1
             })
         })
-        .collect();
-    (elements, sub_cells)
+        .collect()
+}
+
+/// The p^D Q1 sub-cells of a tensor element `el` (tensor order), corners
+/// in Q1 order.
+fn tensor_sub_cells<const D: usize, const N: usize>(el: &[usize], p: usize) -> impl Iterator<Item = [usize; N]> + '_ {
+    let n1 = p + 1;
+    tensor_indices::<D>(p - 1).map(move |idx| {
+        let at = |off: [usize; D]| el[(0..D).map(|d| (idx[d] + off[d]) * n1.pow(d as u32)).sum::<usize>()];
+        std::array::from_fn(|a| at(std::array::from_fn(|d| usize::from(crate::lsfem::q1_corner(a, d) == 1.0))))
+    })
 }
 
 /// The shape of a linear cell of `N` nodes in dimension `D`.
@@ -468,24 +577,34 @@ fn simplex_elements<M: Subdividable<D, N>, const D: usize, const N: usize>(
     let shape = linear_shape::<D, N>();
     let space = simplex::space(shape, p, spacing).expect("the order was checked");
     let lattice = simplex::lattice(shape, p);
-    let mut elements = Vec::with_capacity(coarse.cells().len());
-    for (c, cell) in coarse.cells().iter().enumerate() {
-        let corners = cell.map(|n| coarse.nodes()[n]);
-        let element: Vec<usize> = lattice
-            .iter()
-            .zip(&space.nodes)
-            .map(|(idx, xi)| {
-                *ids.entry(simplex_key::<D, N>(c, cell, *idx, p)).or_insert_with(|| {
-                    nodes.push(at_reference(&corners, std::array::from_fn(|d| xi[d])));
-                    nodes.len() - 1
-                })
-            })
-            .collect();
-        elements.push(element);
-    }
+    let elements: Vec<Vec<usize>> = coarse.cells().iter().enumerate().map(|(c, cell)| simplex_element(c, cell, coarse.nodes(), (&lattice, &space.nodes, p), ids, nodes)).collect();
     let subs = simplex::sub_simplices(shape, p);
     let sub_cells = elements.iter().flat_map(|el| subs.iter().map(move |s| std::array::from_fn(|a| el[s[a]]))).collect();
     (elements, sub_cells)
+}
+
+/// The fine nodes of simplex `c` with corners `cell` (lattice order),
+/// made or found by their keys; `(lattice, xi, p)` are the space's
+/// lattice indices, reference nodes and order.
+fn simplex_element<const D: usize, const N: usize>(
+    c: usize,
+    cell: &[usize; N],
+    at: &[[f64; D]],
+    (lattice, xi, p): (&[[usize; 3]], &[[f64; 3]], usize),
+    ids: &mut HashMap<Key, usize>,
+    nodes: &mut Vec<[f64; D]>,
+) -> Vec<usize> {
+    let corners = cell.map(|n| at[n]);
+    lattice
+        .iter()
+        .zip(xi)
+        .map(|(idx, xi)| {
+            *ids.entry(simplex_key::<D, N>(c, cell, *idx, p)).or_insert_with(|| {
+                nodes.push(at_reference(&corners, std::array::from_fn(|d| xi[d])));
+                nodes.len() - 1
+            })
+        })
+        .collect()
 }
 
 /// The key of lattice node `idx` (i, j, k) of simplex `c` with corners
@@ -1206,6 +1325,53 @@ mod tests {
                 }
             }
             assert!(s.coarse_nodes.iter().all(|&n| n != usize::MAX));
+        }
+    }
+
+    /// The 3 × 2 box with its right column of quads cut into triangles:
+    /// quads and triangles share the fine nodes of their common edges (at
+    /// the 1D Gauss–Lobatto nodes), every fine triangle is positive and
+    /// the fine cells tile the box.
+    #[test]
+    fn mixed_subdivision_shares_edges_across_kinds() {
+        use crate::mesh::{MixedPlaneMesh, PlaneCell};
+        let q = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 2);
+        let mut cells = Vec::new();
+        for (c, &[a, b, cc, d]) in q.cells.iter().enumerate() {
+            if c % 3 == 2 {
+                cells.extend([PlaneCell::Triangle([a, b, cc]), PlaneCell::Triangle([a, cc, d])]);
+            } else {
+                cells.push(PlaneCell::Quad([a, b, cc, d]));
+            }
+        }
+        let coarse = MixedPlaneMesh { nodes: q.nodes.clone(), cells, edges: q.edges.clone(), part_names: q.part_names.clone() };
+        for p in 1..=4 {
+            let (s, owner) = subdivide_mixed(&coarse, p, Spacing::GaussLobatto).unwrap();
+            // 4 quads of (p+1)² nodes and 4 triangles of (p+1)(p+2)/2, less
+            // the shared ones: the 12 vertices, p − 1 on each of the 19
+            // edges (17 of the grid, 2 diagonals), and the quads' (p−1)²
+            // and triangles' (p−1)(p−2)/2 inner nodes
+            let inner = |k: usize| k.saturating_sub(1);
+            let want = 12 + 19 * inner(p) + 4 * inner(p) * inner(p) + 4 * inner(p) * inner(p.saturating_sub(1)) / 2;
+            assert_eq!(s.fine.nodes.len(), want, "p = {p}");
+            let mut sorted = s.fine.nodes.clone();
+            sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            assert!(sorted.windows(2).all(|w| dist2(w[0], w[1]) > 1e-20), "p = {p}: two fine nodes at one point");
+            assert_eq!(s.fine.cells.len(), 4 * 2 * p * p + 4 * p * p);
+            assert!(crate::quality::certify::invalid_cells(&s.fine.cells, &s.fine.nodes).is_empty());
+            assert!((s.fine.area() - 1.0).abs() < 1e-14);
+            assert_eq!(s.fine.edges.len(), 10 * p);
+            let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
+            assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+            // each fine cell lies in its owner: its centroid inside the
+            // coarse cell's bounding box
+            for (f, cell) in s.fine.cells.iter().enumerate() {
+                let c = cell.map(|n| s.fine.nodes[n]);
+                let mid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0];
+                let corners = coarse.cells[owner[f]].nodes().iter().map(|&n| coarse.nodes[n]);
+                let (lo, hi) = corners.fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), x| ([lo[0].min(x[0]), lo[1].min(x[1])], [hi[0].max(x[0]), hi[1].max(x[1])]));
+                assert!((0..2).all(|d| lo[d] < mid[d] && mid[d] < hi[d]), "fine cell {f} outside coarse cell {}", owner[f]);
+            }
         }
     }
 

@@ -14,7 +14,7 @@ use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
-use crate::mesh::{polygon_area, PlaneMesh, Point2, Point3, SolidMesh};
+use crate::mesh::{polygon_area, MixedPlaneMesh, PlaneMesh, Point2, Point3, SolidMesh};
 use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
@@ -241,8 +241,17 @@ pub struct Definitions {
     pub jf: &'static str,
 }
 
+/// What `curve` needs of a kind of linear mesh: Algorithms 2 and 3 on it,
+/// and the picture of the result.
+pub trait Curvable<const D: usize> {
+    /// Algorithms 2 and 3 on this mesh, reporting Algorithm 2's progress.
+    fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<D>, CurveError>;
+    /// A picture of a curved mesh, elements coloured by `values`.
+    fn draw_curved(mesh: &CurvedMesh<D>, values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
+}
+
 /// What a kind of mesh writes and draws: the per-dimension end of a run.
-pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D, N> {
+pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D, N> + Curvable<D> {
     /// What the figures mean.
     const DEFINITIONS: Definitions;
     /// Validity and shape figures.
@@ -258,10 +267,6 @@ pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D
     /// A picture of the mesh at positions `nodes`, cells coloured by
     /// `values`.
     fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
-    /// Algorithms 2 and 3 on this mesh, reporting Algorithm 2's progress.
-    fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<D>, CurveError>;
-    /// A picture of a curved mesh, elements coloured by `values`.
-    fn draw_curved(mesh: &CurvedMesh<D>, values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
 }
 
 /// What every picture of one run shares, and its title and width.
@@ -316,13 +321,37 @@ impl<const N: usize> Outputs<2, N> for PlaneMesh<N> {
     fn draw(&self, nodes: &[Point2], values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
         Self::draw_curved(&CurvedMesh { nodes: nodes.to_vec(), ..CurvedMesh::from_quads(self) }, values, look)
     }
+}
+
+impl<const N: usize> Curvable<2> for PlaneMesh<N> {
     fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
-        curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
+        curve_with_progress(self, parts, opts, algorithm2(progress))
     }
     fn draw_curved(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
-        let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
-        render_quads(mesh, values, &opts)
+        draw_plane(mesh, values, look)
     }
+}
+
+/// Quads and triangles together: `curve` only (Algorithm 1's cases make
+/// meshes of one kind).
+impl Curvable<2> for MixedPlaneMesh {
+    fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
+        crate::highorder::curve::curve_mixed(self, parts, opts, algorithm2(progress))
+    }
+    fn draw_curved(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
+        draw_plane(mesh, values, look)
+    }
+}
+
+/// Algorithm 2's progress as the run's.
+fn algorithm2(progress: &mut dyn FnMut(Progress)) -> impl FnMut(f64, &crate::deform::RunStats) + '_ {
+    |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations })
+}
+
+/// The picture of a plane curved mesh.
+fn draw_plane(mesh: &CurvedMesh<2>, values: &[f64], look: &Look<2>) -> Result<tiny_skia::Pixmap, RenderError> {
+    let opts = RenderOptions { width: look.width, bounds: Some(look.bounds), range: Some(look.range), title: Some(look.title.clone()), label: look.label.to_string(), colour_map: look.colour_map, ..Default::default() };
+    render_quads(mesh, values, &opts)
 }
 
 /// Hexes and tetrahedra share the solid outputs; only the words of the
@@ -362,8 +391,14 @@ where
     fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
         Self::draw_curved(&CurvedMesh { nodes: nodes.to_vec(), ..CurvedMesh::from_hexes(self) }, values, look)
     }
+}
+
+impl<const N: usize, const K: usize> Curvable<3> for SolidMesh<N, K>
+where
+    SolidMesh<N, K>: Q1Mesh<3, N> + Subdividable<3, N>,
+{
     fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
-        curve_with_progress(self, parts, opts, |t, s| progress(Progress { algorithm: 2, t, steps: s.steps, halved: s.halved, iterations: s.last_iterations }))
+        curve_with_progress(self, parts, opts, algorithm2(progress))
     }
     fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
         render_hexes(mesh, values, &options3(look))
@@ -711,6 +746,8 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
         AnyMesh::Tetrahedra(mesh) => curve_solid(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
         AnyMesh::Quads(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         AnyMesh::Triangles(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
+        // curve_mixed names tangled cells by their coarse cell
+        AnyMesh::Mixed2(mesh) => curve_mixed_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
@@ -729,7 +766,7 @@ where
 {
     let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, gfile)?;
     geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), gfile)?;
-    let (mesh, shared) = one_group_per_facet(&mesh, &unbound, gfile)?;
+    let (mesh, shared) = one_group_per_mesh_facet(&mesh, &unbound, gfile)?;
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, progress)
 }
 
@@ -745,7 +782,26 @@ fn curve_plane<const N: usize>(
     let turned = mesh.orient_counter_clockwise();
     let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, gfile)?;
     geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), gfile)?;
-    let (mesh, shared) = one_group_per_facet(&mesh, &unbound, gfile)?;
+    let (mesh, shared) = one_group_per_mesh_facet(&mesh, &unbound, gfile)?;
+    curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, progress)
+}
+
+/// `curve` on a plane mesh of quads and triangles together.
+fn curve_mixed_plane(
+    mut mesh: MixedPlaneMesh,
+    geometry: &crate::app::bind::GeometryFile,
+    gfile: &str,
+    job: (&CurveJob, &crate::io::layout::Layout),
+    progress: &mut impl FnMut(Progress),
+) -> Result<CurveReport, RunError> {
+    let turned = mesh.orient_counter_clockwise();
+    let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, gfile)?;
+    geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), gfile)?;
+    let facets = mesh.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
+    let (kept, shared) = one_group_per_facet(facets, &mesh.part_names, &unbound, gfile)?;
+    if let Some(kept) = kept {
+        mesh.edges = kept.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
+    }
     curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, progress)
 }
 
@@ -805,14 +861,24 @@ fn unkept(layout: &crate::io::layout::Layout) -> Result<(), String> {
 /// groups sharing elements are refused, naming both. Returns the mesh with
 /// one copy of each element and, per copy left out, the index of the kept
 /// one and its group (the output puts the element in that group too).
-fn one_group_per_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(mesh: &M, unbound: &[String], gfile: &str) -> Result<(M, Vec<(usize, usize)>), RunError> {
+fn one_group_per_mesh_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(mesh: &M, unbound: &[String], gfile: &str) -> Result<(M, Vec<(usize, usize)>), RunError> {
+    let (kept, shared) = one_group_per_facet(mesh.facets(), mesh.names(), unbound, gfile)?;
+    match kept {
+        None => Ok((mesh.clone(), shared)),
+        Some(kept) => Ok((M::assemble(mesh.nodes().to_vec(), mesh.cells().to_vec(), kept, mesh.names().to_vec()), shared)),
+    }
+}
+
+/// [`one_group_per_mesh_facet`] on the boundary `facets` (nodes, part) of
+/// a mesh with parts `names`: the facets kept, if any was left out.
+type KeptFacets = (Option<Vec<(Vec<usize>, usize)>>, Vec<(usize, usize)>);
+fn one_group_per_facet(facets: Vec<(Vec<usize>, usize)>, names: &[String], unbound: &[String], gfile: &str) -> Result<KeptFacets, RunError> {
     use std::collections::HashMap;
-    let names = mesh.names();
     let bound = |part: usize| !unbound.contains(&names[part]);
     let mut first: HashMap<Vec<usize>, usize> = HashMap::new();
     let mut kept: Vec<(Vec<usize>, usize)> = Vec::new();
     let mut shared: Vec<(usize, usize)> = Vec::new();
-    for (nodes, part) in mesh.facets() {
+    for (nodes, part) in facets {
         let mut key = nodes.clone();
         key.sort_unstable();
         let Some(&k) = first.get(&key).filter(|&&k| kept[k].1 != part) else {
@@ -839,9 +905,9 @@ fn one_group_per_facet<M: Subdividable<D, N>, const D: usize, const N: usize>(me
         }
     }
     if shared.is_empty() {
-        return Ok((mesh.clone(), shared));
+        return Ok((None, shared));
     }
-    Ok((M::assemble(mesh.nodes().to_vec(), mesh.cells().to_vec(), kept, names.to_vec()), shared))
+    Ok((Some(kept), shared))
 }
 
 /// An off-shape node of the input named by its MSH tag.
@@ -882,7 +948,7 @@ fn by_tag(e: RunError, tags: &[u64], per_cell: usize) -> RunError {
     }
 }
 
-fn curve_mesh<M: Outputs<D, N>, const D: usize, const N: usize>(
+fn curve_mesh<M: Curvable<D>, const D: usize>(
     mesh: &M,
     parts: &[BoundaryPart<D>],
     (unbound, shared): (Vec<String>, &[(usize, usize)]),

@@ -10,10 +10,10 @@
 
 use super::{check_order, Basis1d, HighOrderError, Spacing};
 use crate::mesh::element::Shape;
-use crate::quality::certify::{Certificate, CertifyOptions, ElementCertifier};
-use crate::refine::{refine_parts, subdivide, RefineMesh, Settle, Subdividable, Subdivision};
+use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
+use crate::refine::{refine_parts, subdivide, subdivide_mixed, RefineMesh, Settle, Subdividable, Subdivision};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
-use crate::mesh::{CurvedBoundary, CurvedMesh};
+use crate::mesh::{CurvedBoundary, CurvedMesh, MixedPlaneMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -305,8 +305,9 @@ pub const DRIFT_LIMIT: f64 = 1.0;
 /// The elements with a node on a curved facet, watched during a sliding
 /// run of Algorithm 2.
 struct Watch {
-    certifier: ElementCertifier,
-    elements: Vec<Vec<usize>>,
+    certifiers: Certifiers,
+    /// The watched elements with their kind.
+    elements: Vec<(Shape, Vec<usize>)>,
     /// Per node of a curved facet of a watched element, the node one row
     /// in from it and their distance at the start: the first rows'
     /// heights, which sliding's drift changes ([`Watch::drift`]).
@@ -321,9 +322,15 @@ impl Watch {
                 nodes.iter().for_each(|&n| on[n] = true);
             }
         }
-        let elements: Vec<Vec<usize>> = sub.elements.iter().filter(|e| e.iter().any(|&n| on[n])).cloned().collect();
-        let rows = first_rows::<D>(sub.shape, &elements, sub.p, &on, sub.fine.nodes());
-        Ok(Watch { certifier: ElementCertifier::new(sub.shape, sub.p, spacing)?, elements, rows })
+        let watched = (0..sub.elements.len()).filter(|&e| sub.elements[e].iter().any(|&n| on[n]));
+        let elements: Vec<(Shape, Vec<usize>)> = watched.map(|e| (sub.element_shape(e), sub.elements[e].clone())).collect();
+        let shapes = sub.shapes();
+        let mut rows = Vec::new();
+        for &shape in &shapes {
+            let of_shape: Vec<Vec<usize>> = elements.iter().filter(|e| e.0 == shape).map(|e| e.1.clone()).collect();
+            rows.extend(first_rows::<D>(shape, &of_shape, sub.p, &on, sub.fine.nodes()));
+        }
+        Ok(Watch { certifiers: Certifiers::new(&shapes, sub.p, spacing)?, elements, rows })
     }
 
     /// The largest relative change of a first row's height since the start.
@@ -337,9 +344,9 @@ impl Watch {
         let quick = CertifyOptions { rel_tol: 0.5, max_splits: 64, samples: 2 };
         self.elements
             .par_iter()
-            .filter(|e| {
+            .filter(|(shape, e)| {
                 let ctrl: Vec<[f64; D]> = e.iter().map(|&n| nodes[n]).collect();
-                self.certifier.certify(&ctrl, &quick).min_det_upper <= 0.0
+                self.certifiers.of(*shape).certify(&ctrl, &quick).min_det_upper <= 0.0
             })
             .count()
     }
@@ -487,16 +494,17 @@ pub struct Curved<const D: usize> {
 /// Certifies every element; returns the certificates and the summary
 /// without the boundary figures.
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
-    let certifier = ElementCertifier::new(mesh.shape, mesh.p, mesh.spacing)?;
-    let per_cell = mesh.nodes_per_cell();
+    let certifiers = Certifiers::new(&mesh.shapes(), mesh.p, mesh.spacing)?;
     let certs: Vec<Certificate> = (0..mesh.cells.len())
         .into_par_iter()
         .map(|c| {
             let ctrl = mesh.cell_coords(c);
+            let shape = mesh.cell_shape(c);
+            let per_cell = shape.num_nodes(mesh.p);
             if ctrl.len() != per_cell {
                 return Err(HighOrderError::NodeCount { order: mesh.p, dim: D, expected: per_cell, found: ctrl.len() });
             }
-            Ok(certifier.certify(&ctrl, &CertifyOptions::default()))
+            Ok(certifiers.of(shape).certify(&ctrl, &CertifyOptions::default()))
         })
         .collect::<Result<_, HighOrderError>>()?;
     let q = summary(mesh, &certs);
@@ -540,7 +548,7 @@ pub fn curve_with_progress<M, const D: usize, const N: usize>(
     coarse: &M,
     parts: &[BoundaryPart<D>],
     opts: &CurveOptions,
-    mut progress: impl FnMut(f64, &RunStats),
+    progress: impl FnMut(f64, &RunStats),
 ) -> Result<Curved<D>, CurveError>
 where
     M: Subdividable<D, N>,
@@ -551,14 +559,60 @@ where
     if !bad.is_empty() {
         return Err(CurveError::InvalidCoarse(bad));
     }
-    let mut parts2 = refine_parts(parts);
-    // a facet of the linear mesh is its corners, in cyclic order
-    if let Some(o) = worst_off_shape(coarse.nodes(), &coarse.facets(), |f| f.to_vec(), &parts2, coarse.names(), opts.shape_tolerance) {
-        return Err(CurveError::OffShape(Box::new(o)));
-    }
-    let p = opts.order;
+    let parts = on_shape_parts(coarse.nodes(), &coarse.facets(), coarse.names(), parts, opts)?;
     let clock = Instant::now();
-    let sub = subdivide(coarse, p, opts.spacing)?;
+    let sub = subdivide(coarse, opts.order, opts.spacing)?;
+    let aspect = largest_aspect(coarse.nodes(), coarse.cells());
+    curve_subdivided(&sub, (coarse.names(), aspect, clock), parts, opts, progress)
+}
+
+/// [`curve_with_progress`] on a mixed mesh of quads and triangles: the
+/// elements keep their kinds, Algorithm 2 runs on the triangles of
+/// [`subdivide_mixed`]. Cells that tangle are named by the coarse cell.
+pub fn curve_mixed(coarse: &MixedPlaneMesh, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<2>, CurveError> {
+    check_order(opts.order)?;
+    let bad = crate::quality::certify::invalid_mixed_cells(coarse);
+    if !bad.is_empty() {
+        return Err(CurveError::InvalidCoarse(bad));
+    }
+    let facets: Vec<(Vec<usize>, usize)> = coarse.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
+    let parts = on_shape_parts(&coarse.nodes, &facets, &coarse.part_names, parts, opts)?;
+    let clock = Instant::now();
+    let (sub, owner) = subdivide_mixed(coarse, opts.order, opts.spacing)?;
+    curve_subdivided(&sub, (&coarse.part_names, coarse.largest_aspect(), clock), parts, opts, progress).map_err(|e| match e {
+        CurveError::Deform(DeformError::Tangled { t, dt, cells }) => {
+            let mut cells: Vec<usize> = cells.iter().map(|&c| owner[c]).collect();
+            cells.dedup();
+            CurveError::Deform(DeformError::Tangled { t, dt, cells })
+        }
+        e => e,
+    })
+}
+
+/// The parts of Algorithm 2 for `parts`, once every boundary facet (its
+/// corners, in cyclic order) lies on its shape.
+fn on_shape_parts<const D: usize>(nodes: &[[f64; D]], facets: &[(Vec<usize>, usize)], names: &[String], parts: &[BoundaryPart<D>], opts: &CurveOptions) -> Result<Vec<BoundaryPart<D>>, CurveError> {
+    let parts = refine_parts(parts);
+    match worst_off_shape(nodes, facets, |f| f.to_vec(), &parts, names, opts.shape_tolerance) {
+        Some(o) => Err(CurveError::OffShape(Box::new(o))),
+        None => Ok(parts),
+    }
+}
+
+/// Algorithms 2 and 3 from the subdivided mesh, with the part names, the
+/// largest coarse cell aspect and the clock started before subdividing.
+fn curve_subdivided<M, const D: usize, const N: usize>(
+    sub: &Subdivision<M, D>,
+    (names, aspect, clock): (&[String], f64, Instant),
+    mut parts2: Vec<BoundaryPart<D>>,
+    opts: &CurveOptions,
+    mut progress: impl FnMut(f64, &RunStats),
+) -> Result<Curved<D>, CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    let p = opts.order;
     let dirichlet_parts = with_dirichlet_data(&parts2);
     if opts.dirichlet {
         parts2 = dirichlet_parts.clone();
@@ -579,12 +633,11 @@ where
     let schedule: Vec<(DeformOptions, bool)> = steps.iter().flat_map(|f| [(f.clone(), false), (f.clone(), true)]).filter(|&(_, d)| d || !opts.dirichlet).collect();
     let mut certify_s = 0.0;
     let mut sliding_left = None;
-    let watch = Watch::new(&sub, &parts2, opts.spacing)?;
-    let aspect = largest_aspect(coarse.nodes(), coarse.cells());
+    let watch = Watch::new(sub, &parts2, opts.spacing)?;
     let unknowns = D * sub.fine.nodes().len();
     let factor = starts_with_factor::<D>(&opts.flow, aspect, unknowns);
     tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns: auto starts with the factor: {factor}");
-    let mut runner = Runner { sub: &sub, names: coarse.names(), spacing: opts.spacing, factor, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
+    let mut runner = Runner { sub, names, spacing: opts.spacing, factor, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
     let mut attempts = 0;
     let slid = loop {
         let (flow, dirichlet) = schedule[attempts].clone();
@@ -879,8 +932,8 @@ where
     let snapped = CurvedMesh { nodes, ..slid.mesh.clone() };
     let mut certificates = slid.certificates.clone();
     let touched: Vec<usize> = (0..snapped.cells.len()).filter(|&c| snapped.cells[c].iter().any(|&n| snapped.nodes[n] != slid.mesh.nodes[n])).collect();
-    let certifier = ElementCertifier::new(snapped.shape, snapped.p, snapped.spacing)?;
-    let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certifier.certify(&snapped.cell_coords(c), &CertifyOptions::default())).collect();
+    let certifiers = Certifiers::new(&snapped.shapes(), snapped.p, snapped.spacing)?;
+    let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certifiers.of(snapped.cell_shape(c)).certify(&snapped.cell_coords(c), &CertifyOptions::default())).collect();
     // a snap that shears a thin cell stays valid but ruins it (measured:
     // a 1e-5 layer at p = 4, min scaled Jacobian 0.72 → 0.001): snapping
     // must keep every element's scaled Jacobian within SNAP_KEEP of before
@@ -930,12 +983,13 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
         k
     };
     // the element's faces, each node with the node across the element
-    let across = element_faces::<D>(mesh.shape, p, p);
+    // per kind of cell, its faces
+    let across: HashMap<Shape, Vec<Vec<(usize, usize, bool)>>> = mesh.shapes().into_iter().map(|s| (s, element_faces::<D>(s, p, p))).collect();
     let facet_corners = corner_positions(mesh.shape.facet_shape(), p);
     // every element face by its sorted corner nodes: (element, face)
     let mut faces: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
     for (e, el) in mesh.cells.iter().enumerate() {
-        for (f, face) in across.iter().enumerate() {
+        for (f, face) in across[&mesh.cell_shape(e)].iter().enumerate() {
             let corners: Vec<usize> = face.iter().filter(|c| c.2).map(|c| el[c.0]).collect();
             faces.insert(corners_key(corners), (e, f));
         }
@@ -949,7 +1003,7 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
         let mut worst = FirstLayer::default();
         // each face node and the node across the cell from it
         let el = &mesh.cells[e];
-        for (node, opp, corner) in across[f].iter().map(|&(a, b, c)| (el[a], el[b], c)) {
+        for (node, opp, corner) in across[&mesh.cell_shape(e)][f].iter().map(|&(a, b, c)| (el[a], el[b], c)) {
             let (h0, h) = (dist(straight, node, opp), dist(&mesh.nodes, node, opp));
             let change = (h / h0 - 1.0).abs();
             worst.all_nodes = worst.all_nodes.max(change);

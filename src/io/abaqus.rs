@@ -269,11 +269,14 @@ fn key(mut nodes: Vec<usize>) -> Vec<usize> {
 /// (layout and conventions in the [module docs](self)). Fails if the mesh
 /// fails [`CurvedMesh::validate`], has a degenerate cell, a boundary
 /// element on no cell side (or two on one), a mesh-boundary side without a
-/// boundary element, or part names that are not single words.
+/// boundary element, part names that are not single words, or
+/// triangles or tetrahedra, alone or among quads ([`AbaqusError::Shape`]).
 pub fn abaqus_string<const D: usize>(mesh: &CurvedMesh<D>) -> Result<String, AbaqusError> {
     mesh.validate().map_err(AbaqusError::InvalidMesh)?;
-    if mesh.is_simplex() {
-        return Err(AbaqusError::Shape(mesh.shape));
+    // any cell of another kind, not just the first (a mixed mesh would
+    // have its triangles written as quads)
+    if let Some(shape) = mesh.shapes().into_iter().find(|s| s.is_simplex()) {
+        return Err(AbaqusError::Shape(shape));
     }
     for name in &mesh.part_names {
         if name == INTERIOR || name.chars().any(char::is_whitespace) {
@@ -520,6 +523,21 @@ mod tests {
         let bent = CurvedMesh::<2>::structured(2, Spacing::Equispaced, [2, 1], |[x, y]| [x, y + 0.3 * x * x]).unwrap();
         let s = abaqus_string(&bent).unwrap();
         assert!(s.lines().filter(|l| *l == "**  1 1 1 1").count() == 2, "{s}");
+    }
+
+    /// Triangles among quads are refused, named: the HOHQMesh form has no
+    /// place for them.
+    #[test]
+    fn a_mixed_mesh_is_refused_naming_its_triangles() {
+        let dir = tempfile::tempdir().unwrap();
+        for p in [1, 2, 3] {
+            let m = crate::io::layout::tests::mixed2(p);
+            let err = abaqus_string(&m).unwrap_err();
+            assert!(matches!(err, AbaqusError::Shape(crate::mesh::element::Shape::Triangle)), "p = {p}: {err}");
+            assert!(err.to_string().contains("not Triangles"), "{err}");
+            let path = dir.path().join("mixed.inp");
+            assert!(write_abaqus(&path, &m).is_err() && !path.exists());
+        }
     }
 
     #[test]

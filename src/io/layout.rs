@@ -192,7 +192,7 @@ impl Layout {
             .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: mesh.shape.facet_shape(), order: p, nodes: b.nodes.clone() })
             .collect();
         let cells = mesh.cells.iter().enumerate();
-        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.shape, order: p, nodes: n.clone() }));
+        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.cell_shape(c), order: p, nodes: n.clone() }));
         Layout {
             physical_names,
             entities,
@@ -235,7 +235,7 @@ impl Layout {
             let lost = |why: &str| LayoutError::Lost { tag: el.tag, shape: el.shape, entity: el.entity, why: why.into() };
             let (order, nodes) = match el.shape.dim() {
                 0 => (1, corners),
-                d if d == D => (p, mesh.cells.get(cell_of[&e]).ok_or_else(|| lost("fewer curved cells than input cells"))?.clone()),
+                d if d == D => (p, curved_cell(mesh, cell_of[&e], el.shape).map_err(|why| lost(&why))?),
                 _ => (p, lookup.find(&corners).ok_or_else(|| lost("its corners are no edge or face of a cell"))?),
             };
             elements.push(Element { tag: el.tag, entity: el.entity, shape: el.shape, order, nodes });
@@ -315,6 +315,8 @@ impl Layout {
             p: cells.first().map_or(1, |c| c.order),
             spacing: crate::mesh::element::Spacing::Equispaced,
             nodes: self.coords.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
+            // each keeps its node count, which tells its kind in a mixed
+            // mesh (`CurvedMesh::cell_shape`): `shape` is the first's
             cells: cells.iter().map(|c| c.nodes.clone()).collect(),
             boundary,
             part_names,
@@ -532,6 +534,36 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> 
     out
 }
 
+/// What [`SubElements::new`] looks up per cell of one kind, computed once
+/// per kind rather than per cell.
+struct CellKind {
+    shape: Shape,
+    /// Local indices of the cell's corners.
+    corners: Vec<usize>,
+    /// Its edges and faces (dimensions `1..D`): their corners' places in
+    /// the sub-element, and their nodes as local indices of the cell.
+    subs: Vec<(Vec<usize>, Vec<usize>)>,
+}
+
+impl CellKind {
+    fn new(shape: Shape, p: usize, dim: usize) -> CellKind {
+        let subs = (1..dim).flat_map(|d| sub_elements(shape, p, d)).map(|(s, sub)| (corner_indices(s, p), sub)).collect();
+        CellKind { shape, corners: corner_indices(shape, p), subs }
+    }
+}
+
+/// Curved cell `c`, which must be of the input element's `shape`: input
+/// cells and curved cells are matched by tag order alone, so a kind that
+/// differs means the orders disagree (a triangle would be written with a
+/// quad's nodes).
+fn curved_cell<const D: usize>(mesh: &CurvedMesh<D>, c: usize, shape: Shape) -> Result<Vec<usize>, String> {
+    let cell = mesh.cells.get(c).ok_or("fewer curved cells than input cells")?;
+    match mesh.cell_shape(c) {
+        s if s == shape => Ok(cell.clone()),
+        s => Err(format!("its curved cell {c} is a {s:?}")),
+    }
+}
+
 /// The edges and faces of the curved mesh's cells, by their corner sets.
 struct SubElements {
     /// Sorted corners → the sub-element's nodes in its own tensor order.
@@ -551,23 +583,27 @@ impl SubElements {
                 by_corners.insert(key, nodes());
             }
         };
+        let facet = mesh.shape.facet_shape();
         for b in &mesh.boundary {
-            let corners = corner_indices(mesh.shape.facet_shape(), mesh.p);
-            let mut key: Vec<usize> = corners.iter().map(|&c| b.nodes[c]).collect();
+            // a 3D boundary of triangles and quads is told apart by node count
+            let shape = Shape::with_nodes(D - 1, mesh.p, b.nodes.len()).unwrap_or(facet);
+            let mut key: Vec<usize> = corner_indices(shape, mesh.p).iter().map(|&c| b.nodes[c]).collect();
             key.sort_unstable();
             keep(key, &|| b.nodes.clone(), true);
         }
-        let shape = mesh.shape;
+        let kinds: Vec<CellKind> = mesh.shapes().into_iter().map(|s| CellKind::new(s, mesh.p, D)).collect();
         let near: std::collections::HashSet<usize> = wanted.iter().flatten().copied().collect();
-        let cell_corners = corner_indices(shape, mesh.p);
-        for cell in mesh.cells.iter().filter(|c| cell_corners.iter().any(|&k| near.contains(&c[k]))) {
-            for dim in 1..D {
-                for (sub_shape, sub) in sub_elements(shape, mesh.p, dim) {
-                    let corners = corner_indices(sub_shape, mesh.p);
-                    let mut key: Vec<usize> = corners.iter().map(|&c| cell[sub[c]]).collect();
-                    key.sort_unstable();
-                    keep(key, &|| sub.iter().map(|&i| cell[i]).collect(), false);
-                }
+        for (c, cell) in mesh.cells.iter().enumerate() {
+            // each cell by its own kind: a mixed mesh holds quads and triangles
+            let shape = mesh.cell_shape(c);
+            let kind = kinds.iter().find(|k| k.shape == shape).expect("shapes() holds every cell's kind");
+            if !kind.corners.iter().any(|&k| near.contains(&cell[k])) {
+                continue;
+            }
+            for (corners, sub) in &kind.subs {
+                let mut key: Vec<usize> = corners.iter().map(|&c| cell[sub[c]]).collect();
+                key.sort_unstable();
+                keep(key, &|| sub.iter().map(|&i| cell[i]).collect(), false);
             }
         }
         SubElements { by_corners, p: mesh.p }
@@ -675,8 +711,116 @@ impl PointGrid {
 }
 
 #[cfg(test)]
-mod tests {
+/// Tests, and the mixed test mesh the writers' and the 2D plan's tests
+/// share (`pub`: a test module as `scripts/deps.py` recognises one).
+pub mod tests {
     use super::*;
+    use crate::mesh::element::Spacing;
+
+    /// A mixed mesh of order `p` (equispaced) on [0, 3] × [0, 1], its
+    /// nodes bent by a smooth non-affine map: quads [0, 1] × [0, 1] and
+    /// [1, 2] × [0, 1] (cells 0, 1), and the square [2, 3] × [0, 1] cut
+    /// along its diagonal (2, 0)–(3, 1) into triangles (cells 2, 3), each
+    /// sharing an edge with the next. Node `g` of the lattice of step
+    /// `1/p` is numbered as first met; the boundary is one part `"wall"`,
+    /// eight lines counter-clockwise.
+    pub(crate) fn mixed2(p: usize) -> CurvedMesh<2> {
+        let bend = |[x, y]: [f64; 2]| [x + 0.1 * (2.0 * y).sin(), y + 0.05 * x * x];
+        let (mut nodes, mut index) = (Vec::new(), HashMap::new());
+        let mut at = |g: [usize; 2]| {
+            *index.entry(g).or_insert_with(|| {
+                nodes.push(bend(g.map(|v| v as f64 / p as f64)));
+                nodes.len() - 1
+            })
+        };
+        let q = p + 1;
+        let mut cells: Vec<Vec<usize>> = [0, 1].iter().map(|&x0| (0..q * q).map(|a| at([x0 * p + a % q, a / q])).collect()).collect();
+        for v in [[[2, 0], [3, 0], [3, 1]], [[2, 0], [3, 1], [2, 1]]] {
+            let [a, b, c]: [[usize; 2]; 3] = v;
+            let lattice = simplex::lattice(Shape::Triangle, p);
+            cells.push(lattice.iter().map(|l| at(std::array::from_fn(|d| a[d] * p + l[0] * b[d] + l[1] * c[d] - (l[0] + l[1]) * a[d]))).collect());
+        }
+        let around = [[0, 0], [1, 0], [2, 0], [3, 0], [3, 1], [2, 1], [1, 1], [0, 1], [0, 0]];
+        let boundary = around
+            .windows(2)
+            .map(|w| {
+                let nodes = (0..q).map(|k| at(std::array::from_fn(|d| w[0][d] * p + k * w[1][d] - k * w[0][d]))).collect();
+                crate::mesh::CurvedBoundary { nodes, part: 0 }
+            })
+            .collect();
+        CurvedMesh { shape: Shape::Quadrilateral, p, spacing: Spacing::Equispaced, nodes, cells, boundary, part_names: vec!["wall".into()] }
+    }
+
+    #[test]
+    fn the_mixed_test_mesh_is_valid_and_shares_its_edges() {
+        for p in [2, 3] {
+            let m = mixed2(p);
+            m.validate().unwrap();
+            assert_eq!(m.nodes.len(), (3 * p + 1) * (p + 1), "every lattice node once");
+            let kinds: Vec<Shape> = (0..4).map(|c| m.cell_shape(c)).collect();
+            assert_eq!(kinds, [Shape::Quadrilateral, Shape::Quadrilateral, Shape::Triangle, Shape::Triangle]);
+            // the quad's right edge x = 2 is the second triangle's edge (2,1)–(2,0)
+            let right: Vec<usize> = (0..=p).map(|j| m.cells[1][p + (p + 1) * j]).collect();
+            let mut edge = simplex::edge_nodes(Shape::Triangle, p, 2).iter().map(|&a| m.cells[3][a]).collect::<Vec<_>>();
+            edge.reverse();
+            assert_eq!(right, edge);
+        }
+    }
+
+    #[test]
+    fn a_generated_layout_gives_each_cell_its_own_shape() {
+        for p in [2, 3] {
+            let m = mixed2(p);
+            let layout = Layout::generated(&m);
+            let cells: Vec<&Element> = layout.elements.iter().filter(|e| e.shape.dim() == 2).collect();
+            let shapes: Vec<Shape> = cells.iter().map(|e| e.shape).collect();
+            assert_eq!(shapes, [Shape::Quadrilateral, Shape::Quadrilateral, Shape::Triangle, Shape::Triangle]);
+            assert!(cells.iter().all(|e| e.order == p && e.nodes.len() == e.shape.num_nodes(p)));
+            // and back: the mesh view keeps every cell's nodes, so its kind
+            let (back, attributes, _) = layout.as_mesh::<2>();
+            assert_eq!((back.cells, back.shape, attributes), (m.cells, Shape::Quadrilateral, vec![2; 4]));
+        }
+    }
+
+    /// The linear mixed input, its layout with a line on the triangles'
+    /// diagonal (no boundary element: only the triangle cells have it),
+    /// and where each of its nodes is in `curved`.
+    fn mixed_input(curved: &CurvedMesh<2>) -> (Layout, Vec<usize>) {
+        let coarse = mixed2(1);
+        let mut input = Layout::generated(&coarse);
+        input.elements.push(Element { tag: 100, entity: 9, shape: Shape::Line, order: 1, nodes: vec![coarse.cells[2][0], coarse.cells[2][2]] });
+        let coarse_nodes = coarse.nodes.iter().map(|x| curved.nodes.iter().position(|y| y == x).expect("a corner")).collect();
+        (input, coarse_nodes)
+    }
+
+    #[test]
+    fn a_mixed_input_is_carried_onto_cells_of_its_kinds() {
+        for p in [2, 3] {
+            let m = mixed2(p);
+            let (input, coarse_nodes) = mixed_input(&m);
+            let (out, snapped) = input.curved(&m, &coarse_nodes).unwrap();
+            assert_eq!(snapped, 0.0);
+            let cells: Vec<&Element> = out.elements.iter().filter(|e| e.shape.dim() == 2).collect();
+            for (c, e) in cells.iter().enumerate() {
+                assert_eq!((e.shape, e.order, &e.nodes), (m.cell_shape(c), p, &m.cells[c]), "cell {c}");
+            }
+            // the diagonal from (2, 0) to (3, 1): the second triangle's
+            // edge 0 (its vertices 0 → 1), in that order
+            let diagonal = out.elements.iter().find(|e| e.tag == 100).unwrap();
+            let want: Vec<usize> = simplex::edge_nodes(Shape::Triangle, p, 0).iter().map(|&a| m.cells[3][a]).collect();
+            assert_eq!((diagonal.order, &diagonal.nodes), (p, &want));
+        }
+    }
+
+    #[test]
+    fn an_input_cell_matched_to_a_curved_cell_of_another_kind_is_lost() {
+        let mut m = mixed2(2);
+        m.cells.swap(1, 2);
+        let (input, coarse_nodes) = mixed_input(&mixed2(2));
+        let err = input.curved(&m, &coarse_nodes).unwrap_err();
+        assert!(matches!(err, LayoutError::Lost { shape: Shape::Quadrilateral, .. }), "{err}");
+        assert!(err.to_string().contains("its curved cell 1 is a Triangle"), "{err}");
+    }
 
     #[test]
     fn sub_elements_of_a_hex_are_its_12_edges_and_6_faces() {

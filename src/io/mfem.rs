@@ -142,15 +142,18 @@ pub enum MfemError {
 ///
 /// Fails on meshes that fail [`CurvedMesh::validate`], attribute lists of
 /// the wrong length or with values outside `1..=i32::MAX`, cells with a
-/// repeated corner and boundary elements that are no cell side.
+/// repeated corner, boundary elements that are no cell side, and
+/// triangles or tetrahedra, alone or among quads ([`MfemError::Shape`]).
 pub fn mfem_string<const D: usize>(
     mesh: &CurvedMesh<D>,
     cell_attributes: &[i64],
     boundary_attributes: &[i64],
 ) -> Result<String, MfemError> {
     mesh.validate().map_err(MfemError::InvalidMesh)?;
-    if mesh.is_simplex() {
-        return Err(MfemError::Shape(mesh.shape));
+    // any cell of another kind, not just the first (a mixed mesh would
+    // have its triangles written as quads)
+    if let Some(shape) = mesh.shapes().into_iter().find(|s| s.is_simplex()) {
+        return Err(MfemError::Shape(shape));
     }
     check_attributes("cell", cell_attributes, mesh.cells.len())?;
     check_attributes("boundary element", boundary_attributes, mesh.boundary.len())?;
@@ -470,5 +473,20 @@ mod tests {
         let mut bad = m;
         bad.p = 5;
         assert!(matches!(mfem_string(&bad, &[1, 1], &b), Err(MfemError::InvalidMesh(_))));
+    }
+
+    /// Triangles among quads are refused, named, before anything is
+    /// written: the quad node order would scramble them.
+    #[test]
+    fn a_mixed_mesh_is_refused_naming_its_triangles() {
+        let dir = tempfile::tempdir().unwrap();
+        for p in [1, 2, 3] {
+            let m = crate::io::layout::tests::mixed2(p);
+            let err = mfem_string(&m, &[1; 4], &[1; 8]).unwrap_err();
+            assert!(matches!(err, MfemError::Shape(crate::mesh::element::Shape::Triangle)), "p = {p}: {err}");
+            assert!(err.to_string().contains("not Triangles"), "{err}");
+            let path = dir.path().join("mixed.mesh");
+            assert!(write_mfem(&path, &m, &[1; 4], &[1; 8]).is_err() && !path.exists());
+        }
     }
 }

@@ -1,5 +1,6 @@
-//! VTK XML unstructured grids (`.vtu`, ASCII) of quad and hex meshes of
-//! any order, with per-cell and per-node fields, for ParaView. One writer
+//! VTK XML unstructured grids (`.vtu`, ASCII) of meshes of any order
+//! (quads and triangles, also mixed, hexes, tetrahedra), with per-cell and
+//! per-node fields, for ParaView. One writer
 //! ([`grid_string`]); linear meshes are its order-1 case.
 
 use std::fmt::Write as _;
@@ -157,9 +158,10 @@ fn write_text(path: &Path, text: &str) -> Result<(), VtuError> {
 
 /// The cells of a mesh of any order as a VTK XML UnstructuredGrid (ASCII):
 /// Float64 points (z = 0 in 2D), Int64 connectivity and offsets, UInt8
-/// types ([`VTK_QUAD`] and [`VTK_HEXAHEDRON`] at order 1, else
-/// [`VTK_LAGRANGE_QUADRILATERAL`] and [`VTK_LAGRANGE_HEXAHEDRON`] in VTK 9's
-/// node order, whose order VTK infers from the number of points), one
+/// types, one per cell by its own kind (a mixed mesh holds quads and
+/// triangles; [`VTK_QUAD`], [`VTK_TRIANGLE`], [`VTK_HEXAHEDRON`] and
+/// [`VTK_TETRA`] at order 1, else VTK's Lagrange cells in VTK 9's node
+/// order, whose order VTK infers from the number of points), one
 /// Float64 CellData array per `cell_data` entry and one 3-component
 /// PointData array per `point_vectors` entry. Nodes are resampled to
 /// equispaced ones first; boundary elements are not written. Values are
@@ -272,23 +274,30 @@ fn vtk_type(shape: Shape, p: usize) -> (Vec<usize>, u8) {
     }
 }
 
-/// Connectivity in VTK's node order, offsets (end of each cell), types.
+/// Connectivity in VTK's node order, offsets (end of each cell), types,
+/// each cell by its own kind: a mixed mesh holds quads and triangles.
 fn push_cells<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>) {
-    let (perm, cell_type) = vtk_type(mesh.shape, mesh.p);
+    let kinds: Vec<(Shape, (Vec<usize>, u8))> = mesh.shapes().into_iter().map(|s| (s, vtk_type(s, mesh.p))).collect();
+    let kind = |c: usize| {
+        let shape = mesh.cell_shape(c);
+        &kinds.iter().find(|k| k.0 == shape).expect("shapes() holds every cell's kind").1
+    };
     out.push_str("<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    for cell in &mesh.cells {
-        for (i, v) in to_format(&perm, cell).iter().enumerate() {
+    for (c, cell) in mesh.cells.iter().enumerate() {
+        for (i, v) in to_format(&kind(c).0, cell).iter().enumerate() {
             let _ = write!(out, "{}{v}", if i == 0 { "" } else { " " });
         }
         out.push('\n');
     }
     out.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for c in 1..=mesh.cells.len() {
-        put!(out, "{}", c * perm.len());
+    let mut end = 0;
+    for cell in &mesh.cells {
+        end += cell.len();
+        put!(out, "{end}");
     }
     out.push_str("</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    for _ in &mesh.cells {
-        put!(out, "{cell_type}");
+    for c in 0..mesh.cells.len() {
+        put!(out, "{}", kind(c).1);
     }
     out.push_str("</DataArray>\n</Cells>\n");
 }
@@ -595,6 +604,36 @@ mod tests {
         assert!(text.contains("<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n70\n"));
         // VTK reads files older than 2.2 with VTK 8's hex edge order
         assert!(text.contains("version=\"2.2\""));
+    }
+
+    /// The `<DataArray ... Name="{name}" ...>` values of `text`, as numbers.
+    fn array(text: &str, name: &str) -> Vec<Vec<usize>> {
+        let start = text.find(&format!("Name=\"{name}\"")).unwrap();
+        let body = &text[start..][text[start..].find('\n').unwrap() + 1..];
+        let body = &body[..body.find("</DataArray>").unwrap()];
+        body.lines().map(|l| l.split(' ').map(|v| v.parse().unwrap()).collect()).collect()
+    }
+
+    /// Each cell of a mixed mesh has its own type, node count and VTK
+    /// node order: quads 70, triangles 69 (9 and 5 at p = 1).
+    #[test]
+    fn a_mixed_mesh_gives_each_cell_its_own_type() {
+        for p in 1..=3 {
+            let m = crate::io::layout::tests::mixed2(p);
+            let text = m.vtu_string(&[]).unwrap();
+            let types: Vec<usize> = array(&text, "types").concat();
+            let (quad, triangle) = if p == 1 { (VTK_QUAD, VTK_TRIANGLE) } else { (VTK_LAGRANGE_QUADRILATERAL, VTK_LAGRANGE_TRIANGLE) };
+            assert_eq!(types, [quad, quad, triangle, triangle].map(usize::from), "p = {p}");
+            let (nq, nt) = ((p + 1) * (p + 1), (p + 1) * (p + 2) / 2);
+            assert_eq!(array(&text, "offsets").concat(), [nq, 2 * nq, 2 * nq + nt, 2 * nq + 2 * nt], "p = {p}");
+            let connectivity = array(&text, "connectivity");
+            for (c, cell) in m.cells.iter().enumerate() {
+                let (perm, _) = vtk_type(m.cell_shape(c), p);
+                assert_eq!(connectivity[c], to_format(&perm, cell), "p = {p}, cell {c}");
+            }
+            // VTK's triangle starts at its three vertices: lattice places 0, p, last
+            assert_eq!(connectivity[2][..3], [m.cells[2][0], m.cells[2][p], m.cells[2][nt - 1]], "p = {p}");
+        }
     }
 
     #[test]

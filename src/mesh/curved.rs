@@ -146,7 +146,8 @@ impl<const D: usize> CurvedMesh<D> {
         })
     }
 
-    /// Number of nodes of a cell: `(p+1)^D` for quads and hexes.
+    /// Number of nodes of a cell of the mesh's first kind ([`Self::shape`]):
+    /// `(p+1)^D` for quads and hexes.
     pub fn nodes_per_cell(&self) -> usize {
         self.shape.num_nodes(self.p)
     }
@@ -154,6 +155,35 @@ impl<const D: usize> CurvedMesh<D> {
     /// Whether the cells are triangles or tetrahedra.
     pub fn is_simplex(&self) -> bool {
         self.shape.is_simplex()
+    }
+
+    /// The kind of cell `c`, told by its node count ([`Shape::with_nodes`]):
+    /// a mixed mesh holds cells of other kinds than [`Self::shape`]. A
+    /// count no kind has (which [`Self::validate`] refuses) gives `shape`.
+    pub fn cell_shape(&self, c: usize) -> Shape {
+        let n = self.cells[c].len();
+        if n == self.shape.num_nodes(self.p) {
+            return self.shape;
+        }
+        Shape::with_nodes(D, self.p, n).unwrap_or(self.shape)
+    }
+
+    /// The kinds of cell the mesh holds, in the order of [`Shape`].
+    pub fn shapes(&self) -> Vec<Shape> {
+        let mut out = vec![self.shape];
+        for c in 0..self.cells.len() {
+            let s = self.cell_shape(c);
+            if !out.contains(&s) {
+                out.push(s);
+            }
+        }
+        out.sort();
+        out
+    }
+
+    /// Whether cells of more than one kind are held (quads with triangles).
+    pub fn is_mixed(&self) -> bool {
+        self.shapes().len() > 1
     }
 
     /// The coordinates of cell `c`'s nodes in tensor order.
@@ -188,7 +218,10 @@ impl<const D: usize> CurvedMesh<D> {
         }
         let per_cell = self.nodes_per_cell();
         for (c, cell) in self.cells.iter().enumerate() {
-            if cell.len() != per_cell {
+            // a mixed mesh: quads with triangles, in 2D (3D kinds beyond
+            // hexes and tets are not curved yet)
+            let other = if D == 2 { Shape::with_nodes(2, self.p, cell.len()) } else { None };
+            if cell.len() != per_cell && other.is_none() {
                 return Err(format!(
                     "cell {c} has {} nodes, expected {per_cell}",
                     cell.len()
@@ -238,12 +271,14 @@ impl<const D: usize> CurvedMesh<D> {
         if self.spacing == Spacing::Equispaced {
             return out;
         }
+        // a node shared by a quad and a triangle is the same point of
+        // both maps (their edges carry the same 1D nodes): the first wins
         let mut done = vec![false; self.nodes.len()];
-        if self.is_simplex() {
-            let space = simplex::space(self.shape, self.p, self.spacing).expect("order checked by validate");
-            let equi = simplex::space(self.shape, self.p, Spacing::Equispaced).expect("order checked by validate");
+        for shape in self.shapes().into_iter().filter(|s| s.is_simplex()) {
+            let space = simplex::space(shape, self.p, self.spacing).expect("order checked by validate");
+            let equi = simplex::space(shape, self.p, Spacing::Equispaced).expect("order checked by validate");
             let (mut values, mut grads) = (vec![0.0; space.nodes.len()], vec![[0.0; 3]; space.nodes.len()]);
-            for cell in &self.cells {
+            for cell in (0..self.cells.len()).filter(|&c| self.cell_shape(c) == shape).map(|c| &self.cells[c]) {
                 for (a, &v) in cell.iter().enumerate() {
                     if std::mem::replace(&mut done[v], true) {
                         continue;
@@ -252,13 +287,11 @@ impl<const D: usize> CurvedMesh<D> {
                     out.nodes[v] = std::array::from_fn(|k| cell.iter().zip(&values).map(|(&w, &b)| b * self.nodes[w][k]).sum());
                 }
             }
-            out.spacing = Spacing::Equispaced;
-            return out;
         }
         let basis = Basis1d::new(self.p, self.spacing).expect("order checked by validate");
         let t = nodes_1d(self.p, Spacing::Equispaced).expect("order checked by validate");
         let n = self.p + 1;
-        for cell in &self.cells {
+        for cell in (0..self.cells.len()).filter(|&c| !self.cell_shape(c).is_simplex()).map(|c| &self.cells[c]) {
             let ctrl: Vec<[f64; D]> = cell.iter().map(|&v| self.nodes[v]).collect();
             for (a, &v) in cell.iter().enumerate() {
                 if std::mem::replace(&mut done[v], true) {
@@ -288,6 +321,18 @@ impl CurvedMesh<2> {
         let (shape, perm) = if N == 3 { (Shape::Triangle, vec![0, 1, 2]) } else { (Shape::Quadrilateral, gmsh_quad_order(1).expect("order 1")) };
         let cells = m.cells.iter().map(|c| from_format(&perm, c)).collect();
         let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
+        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+    }
+}
+
+impl CurvedMesh<2> {
+    /// The linear mesh of quads and triangles as the order-1 case (see
+    /// [`CurvedMesh::from_quads`]); its `shape` is the first cell's.
+    pub fn from_mixed(m: &super::MixedPlaneMesh) -> Self {
+        let quad = gmsh_quad_order(1).expect("order 1");
+        let cells = m.cells.iter().map(|c| if c.shape() == Shape::Quadrilateral { from_format(&quad, c.nodes()) } else { c.nodes().to_vec() }).collect();
+        let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
+        let shape = m.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }

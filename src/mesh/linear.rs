@@ -158,58 +158,76 @@ impl<const N: usize> PlaneMesh<N> {
     /// Per cell, whether to reverse it (see
     /// [`QuadMesh::orient_counter_clockwise`]).
     fn orientation_flips(&self) -> Vec<bool> {
-        use std::collections::HashMap;
-        // undirected edge → (cell, runs from the smaller node)
-        let mut by_edge: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
-        for (c, cell) in self.cells.iter().enumerate() {
-            for k in 0..N {
-                let (a, b) = (cell[k], cell[(k + 1) % N]);
-                by_edge.entry((a.min(b), a.max(b))).or_default().push((c, a < b));
-            }
+        let cells: Vec<&[usize]> = self.cells.iter().map(|c| &c[..]).collect();
+        orientation_flips(&cells, &self.nodes)
+    }
+}
+
+/// Per cell (its corners in cyclic order), whether to reverse it so that
+/// neighbours agree and each connected set has a positive signed area
+/// (see [`QuadMesh::orient_counter_clockwise`]); cells of any number of
+/// corners, so quads and triangles of one mesh agree with each other.
+pub(crate) fn orientation_flips(cells: &[&[usize]], nodes: &[Point2]) -> Vec<bool> {
+    use std::collections::HashMap;
+    let area = |c: usize| {
+        let at = |k: usize| nodes[cells[c][k]];
+        match cells[c].len() {
+            4 => polygon_area(&[at(0), at(1), at(2), at(3)]),
+            _ => polygon_area(&[at(0), at(1), at(2)]),
         }
-        let n = self.cells.len();
-        let mut flip: Vec<Option<bool>> = vec![None; n];
-        let mut out = vec![false; n];
-        for start in 0..n {
-            if flip[start].is_some() {
-                continue;
-            }
-            // a breadth-first walk over the set of `start`
-            flip[start] = Some(false);
-            let (mut set, mut next, mut consistent) = (vec![start], 0, true);
-            while next < set.len() {
-                let c = set[next];
-                next += 1;
-                let fc = flip[c] == Some(true);
-                let cell = self.cells[c];
-                for k in 0..N {
-                    let (a, b) = (cell[k], cell[(k + 1) % N]);
-                    for &(d, fwd) in &by_edge[&(a.min(b), a.max(b))] {
-                        if d == c {
-                            continue;
+    };
+    // undirected edge → (cell, runs from the smaller node)
+    let mut by_edge: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
+    for (c, cell) in cells.iter().enumerate() {
+        let n = cell.len();
+        for k in 0..n {
+            let (a, b) = (cell[k], cell[(k + 1) % n]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push((c, a < b));
+        }
+    }
+    let n = cells.len();
+    let mut flip: Vec<Option<bool>> = vec![None; n];
+    let mut out = vec![false; n];
+    for start in 0..n {
+        if flip[start].is_some() {
+            continue;
+        }
+        // a breadth-first walk over the set of `start`
+        flip[start] = Some(false);
+        let (mut set, mut next, mut consistent) = (vec![start], 0, true);
+        while next < set.len() {
+            let c = set[next];
+            next += 1;
+            let fc = flip[c] == Some(true);
+            let cell = cells[c];
+            let m = cell.len();
+            for k in 0..m {
+                let (a, b) = (cell[k], cell[(k + 1) % m]);
+                for &(d, fwd) in &by_edge[&(a.min(b), a.max(b))] {
+                    if d == c {
+                        continue;
+                    }
+                    // same direction in both: one of them must turn
+                    let want = fc ^ (fwd == (a < b));
+                    match flip[d] {
+                        None => {
+                            flip[d] = Some(want);
+                            set.push(d);
                         }
-                        // same direction in both: one of them must turn
-                        let want = fc ^ (fwd == (a < b));
-                        match flip[d] {
-                            None => {
-                                flip[d] = Some(want);
-                                set.push(d);
-                            }
-                            Some(f) if f != want => consistent = false,
-                            Some(_) => {}
-                        }
+                        Some(f) if f != want => consistent = false,
+                        Some(_) => {}
                     }
                 }
             }
-            let signed: f64 = set.iter().map(|&c| if flip[c] == Some(true) { -1.0 } else { 1.0 } * self.cell_area(c)).sum();
-            if consistent {
-                for &c in &set {
-                    out[c] = (flip[c] == Some(true)) != (signed < 0.0);
-                }
+        }
+        let signed: f64 = set.iter().map(|&c| if flip[c] == Some(true) { -1.0 } else { 1.0 } * area(c)).sum();
+        if consistent {
+            for &c in &set {
+                out[c] = (flip[c] == Some(true)) != (signed < 0.0);
             }
         }
-        out
     }
+    out
 }
 
 #[cfg(test)]

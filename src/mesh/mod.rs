@@ -8,6 +8,8 @@ pub mod curved;
 pub mod element;
 pub mod file;
 mod linear;
+pub mod mixed;
 
 pub use curved::{CurvedBoundary, CurvedMesh};
 pub use linear::*;
+pub use mixed::{MixedPlaneMesh, PlaneCell};

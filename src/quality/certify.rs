@@ -581,6 +581,20 @@ pub fn invalid_cells<const D: usize, const N: usize>(cells: &[[usize; N]], nodes
     (0..cells.len()).into_par_iter().with_min_len(256).filter(|&c| !linear_is_valid(&cells[c].map(|n| nodes[n]))).collect()
 }
 
+/// The cells of a mixed plane mesh not certified valid by
+/// [`linear_is_valid`] (a quad with det J not positive at a corner, a
+/// triangle of non-positive area), in mesh order.
+pub fn invalid_mixed_cells(mesh: &crate::mesh::MixedPlaneMesh) -> Vec<usize> {
+    use crate::mesh::PlaneCell;
+    let at = |n: &usize| mesh.nodes[*n];
+    (0..mesh.cells.len())
+        .filter(|&c| match &mesh.cells[c] {
+            PlaneCell::Triangle(t) => !linear_is_valid(&t.each_ref().map(at)),
+            PlaneCell::Quad(q) => !linear_is_valid(&q.each_ref().map(at)),
+        })
+        .collect()
+}
+
 /// The certifier of one kind and order of element, whatever the kind:
 /// the one API the method and the readers use (tensor Bernstein bounds on
 /// quads and hexes, simplex ones on triangles and tetrahedra).
@@ -615,6 +629,25 @@ impl ElementCertifier {
             ElementCertifier::Tensor(c) => c.certify(ctrl, opts),
             ElementCertifier::Simplex(c) => c.certify(ctrl, opts),
         }
+    }
+}
+
+/// One [`ElementCertifier`] per kind of cell of a mesh: a mixed mesh's
+/// quads and triangles each by their own bounds.
+pub struct Certifiers(Vec<(crate::mesh::element::Shape, ElementCertifier)>);
+
+impl Certifiers {
+    /// For order-`p` elements of each of `shapes` with nodes at `spacing`.
+    pub fn new(shapes: &[crate::mesh::element::Shape], p: usize, spacing: Spacing) -> Result<Self, HighOrderError> {
+        shapes.iter().map(|&s| Ok((s, ElementCertifier::new(s, p, spacing)?))).collect::<Result<_, _>>().map(Certifiers)
+    }
+
+    /// The certifier of `shape`.
+    ///
+    /// # Panics
+    /// If `shape` is not one the set was made for.
+    pub fn of(&self, shape: crate::mesh::element::Shape) -> &ElementCertifier {
+        &self.0.iter().find(|c| c.0 == shape).expect("a certifier for every kind of the mesh").1
     }
 }
 

@@ -6,9 +6,10 @@
 //! `p = 1` ([`CurvedMesh::from_quads`], [`CurvedMesh::from_hexes`]). There
 //! is one plan per dimension:
 //!
-//! - [`render_quads`] fills each cell with the colour of its value over the
-//!   region bounded by its true edges, and draws thin cell edges and a
-//!   thicker boundary; the y axis points up.
+//! - [`render_quads`] fills each cell (quads, triangles, or both in a
+//!   mixed mesh) with the colour of its value over the region bounded by
+//!   its true edges, and draws thin cell edges and a thicker boundary;
+//!   the y axis points up.
 //! - [`render_hexes`] draws the shaded boundary surface seen by a
 //!   [`Camera`], optionally cut open by a [`ClipPlane`].
 //!
@@ -54,7 +55,7 @@ pub use encode::{gif_bytes, png_bytes, write_gif, write_png};
 pub use hex::{render_hexes, Camera, ClipPlane, RenderOptions3};
 pub use quads::{render_quads, RenderOptions};
 
-use crate::mesh::element::{check_order, Basis1d, Spacing, MAX_ORDER};
+use crate::mesh::element::{check_order, Basis1d, Shape, Spacing, MAX_ORDER};
 use crate::mesh::CurvedMesh;
 use layout::Layout;
 
@@ -317,27 +318,34 @@ fn validate<const D: usize>(mesh: &CurvedMesh<D>, values: &[f64]) -> Result<(), 
     if mesh.shape.dim() != D {
         return Err(RenderError::InvalidCurvedMesh { reason: format!("cells of shape {:?} in a {D}D mesh", mesh.shape) });
     }
-    let per_cell = mesh.nodes_per_cell();
+    // the 2D plan draws quads and triangles side by side (a mixed mesh),
+    // the 3D plan one kind
+    let per_cell = match D {
+        2 => vec![Shape::Quadrilateral.num_nodes(mesh.p), Shape::Triangle.num_nodes(mesh.p)],
+        _ => vec![mesh.nodes_per_cell()],
+    };
     check_elements(
         mesh.cells.iter().map(Vec::as_slice),
-        per_cell,
+        &per_cell,
         mesh.nodes.len(),
         "cell",
     )
 }
 
-/// Every element in `elements` must have `per` nodes, all below `nodes`.
-/// The index reported for a bad node is the element's.
+/// Every element in `elements` must have one of the node counts `per`,
+/// its nodes all below `nodes`. The index reported for a bad node is the
+/// element's.
 fn check_elements<'a>(
     elements: impl Iterator<Item = &'a [usize]>,
-    per: usize,
+    per: &[usize],
     nodes: usize,
     what: &str,
 ) -> Result<(), RenderError> {
     for (cell, e) in elements.enumerate() {
-        if e.len() != per {
+        if !per.contains(&e.len()) {
+            let expected = per.iter().map(usize::to_string).collect::<Vec<_>>().join(" or ");
             return Err(RenderError::InvalidCurvedMesh {
-                reason: format!("{what} {cell} has {} nodes, expected {per}", e.len()),
+                reason: format!("{what} {cell} has {} nodes, expected {expected}", e.len()),
             });
         }
         if let Some(&node) = e.iter().find(|&&n| n >= nodes) {

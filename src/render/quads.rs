@@ -1,5 +1,5 @@
-//! The 2D plan: a quad mesh of any order, drawn through each element's own
-//! map so that curved edges look curved.
+//! The 2D plan: a mesh of quads, triangles or both (mixed) of any order,
+//! drawn through each element's own map so that curved edges look curved.
 //!
 //! Every distinct element edge is sampled once along its Lagrange curve
 //! (one straight piece at `p = 1`, [`SAMPLES_PER_ORDER`]` · p` above), and
@@ -18,7 +18,7 @@ use super::{
     basis_table, bounding_box, check_elements, ink, pieces, sample_curve, validate, ColourMap,
     Frame, RenderError, Style,
 };
-use crate::mesh::element::MAX_ORDER;
+use crate::mesh::element::{Shape, MAX_ORDER};
 use crate::mesh::CurvedMesh;
 
 /// Straight pieces per element edge and per unit of order (for `p > 1`):
@@ -118,7 +118,7 @@ pub(super) fn plan(
 ) -> Result<(Frame, QuadCurves), RenderError> {
     validate(mesh, values)?;
     let boundary = mesh.boundary.iter().map(|b| b.nodes.as_slice());
-    check_elements(boundary, mesh.p + 1, mesh.nodes.len(), "boundary element")?;
+    check_elements(boundary, &[mesh.p + 1], mesh.nodes.len(), "boundary element")?;
     let curves = QuadCurves::new(mesh);
     let (lo, hi) = opts.bounds.unwrap_or_else(|| bounding_box(&curves.points));
     if !(0..2).all(|k| lo[k].is_finite() && hi[k].is_finite() && hi[k] > lo[k]) {
@@ -155,7 +155,9 @@ impl QuadCurves {
         let q = p + 1;
         let n = pieces(p, SAMPLES_PER_ORDER);
         let table = basis_table(p, mesh.spacing, n);
-        let local = cell_edges(mesh, p);
+        // each cell is drawn by its own kind: a mixed mesh holds quads
+        // and triangles
+        let (quad_edges, triangle_edges) = (cell_edges(Shape::Quadrilateral, p), cell_edges(Shape::Triangle, p));
         let mut curves = QuadCurves {
             stride: n + 1,
             points: Vec::new(),
@@ -192,9 +194,10 @@ impl QuadCurves {
             (e, reversed)
         };
         let mut ids = [0; MAX_ORDER + 1];
-        for cell in &mesh.cells {
+        for (c, cell) in mesh.cells.iter().enumerate() {
+            let simplex = mesh.cell_shape(c).is_simplex();
             let mut edges = smallvec::SmallVec::new();
-            for l in &local {
+            for l in if simplex { &triangle_edges } else { &quad_edges } {
                 for (id, &a) in ids.iter_mut().zip(l) {
                     *id = cell[a];
                 }
@@ -203,7 +206,7 @@ impl QuadCurves {
                 edges.push((e, rev));
             }
             curves.cell_edges.push(edges);
-            if mesh.is_simplex() {
+            if simplex {
                 // a triangle's node lines are not iso-lines of one axis
                 continue;
             }
@@ -252,9 +255,9 @@ impl QuadCurves {
 /// around the reference cell: a quad's η = 0, ξ = 1, η = 1, ξ = 0 (tensor
 /// order), a triangle's three edges of the element table (lattice order;
 /// their nodes sit at the 1-D node set, so each is the 1-D interpolant).
-fn cell_edges(mesh: &CurvedMesh<2>, p: usize) -> Vec<Vec<usize>> {
-    if mesh.is_simplex() {
-        return (0..3).map(|e| crate::mesh::element::simplex::edge_nodes(mesh.shape, p, e)).collect();
+fn cell_edges(shape: Shape, p: usize) -> Vec<Vec<usize>> {
+    if shape.is_simplex() {
+        return (0..3).map(|e| crate::mesh::element::simplex::edge_nodes(shape, p, e)).collect();
     }
     let q = p + 1;
     vec![

@@ -292,8 +292,10 @@ fn bad_inputs_are_errors_not_panics() {
             ..
         }
     ));
+    // (a quad less one node at p = 1 is a triangle, which is drawn: one
+    // more node is no kind)
     let mut bad = mesh.clone();
-    bad.cells[2].pop();
+    bad.cells[2].push(0);
     assert!(matches!(
         err(&bad, &v, &opts),
         RenderError::InvalidCurvedMesh { .. }
@@ -503,6 +505,37 @@ fn shared_curved_edges_are_sampled_once() {
     let curves = QuadCurves::new(&box_4x3());
     assert_eq!(curves.outline(5).len(), 4);
     assert!(curves.grid.is_empty());
+}
+
+/// Quads and triangles in one picture, each cell drawn by its own kind:
+/// its outline has its own number of edges, the outlines tile the bent
+/// domain, and each cell shows its value's colour inside.
+#[test]
+fn a_mixed_mesh_draws_each_cell_by_its_kind() {
+    // the area of [0, 3] × [0, 1] under the test mesh's bend, whose
+    // det J is 1 − 0.02 x cos 2y
+    let area = 3.0 - 0.02 * 4.5 * 0.5 * 2f64.sin();
+    for p in [1, 2, 3] {
+        let mesh = crate::io::layout::tests::mixed2(p);
+        let curves = QuadCurves::new(&mesh);
+        // 4 + 3 + 2 + 2 distinct edges (x = 1, x = 2 and the diagonal
+        // shared), the 8 around on the boundary
+        assert_eq!((curves.edges(false).count(), curves.edges(true).count()), (3, 8), "p = {p}");
+        let pieces = if p == 1 { 1 } else { 8 * p };
+        let sides: Vec<usize> = (0..4).map(|c| curves.outline(c).len() / pieces).collect();
+        assert_eq!(sides, [4, 4, 3, 3], "p = {p}");
+        let drawn: f64 = (0..4).map(|c| polygon_area(&curves.outline(c))).sum();
+        // p = 1 draws the chords of the curved sides
+        assert!((drawn - area).abs() < if p == 1 { 0.05 } else { 2e-3 }, "p = {p}: area {drawn}, want {area}");
+        let values = [0.9, 1.0, 1.1, 1.2];
+        let opts = RenderOptions { width: 600, draw_edges: false, ..RenderOptions::default() };
+        let (img, frame) = render_decoded(&mesh, &values, &opts);
+        for (c, &v) in values.iter().enumerate() {
+            let x = mesh.cell_coords(c);
+            let mid = [0, 1].map(|k| x.iter().map(|y| y[k]).sum::<f64>() / x.len() as f64);
+            assert_close(at(&img, &frame, mid), frame.colour(v), &format!("p = {p}, cell {c}"));
+        }
+    }
 }
 
 fn frames(sizes: &[u32]) -> Vec<Pixmap> {

@@ -653,7 +653,7 @@ fn a_bound_group_that_no_element_carries_is_an_error() {
 }
 
 #[test]
-fn triangles_are_read_and_prisms_refused_naming_the_block() {
+fn triangles_and_mixed_plane_meshes_are_read_and_prisms_refused_naming_the_block() {
     let dir = TempDir::new().unwrap();
     let tri = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
     std::fs::write(dir.path().join("tri.msh"), tri).unwrap();
@@ -663,9 +663,16 @@ fn triangles_are_read_and_prisms_refused_naming_the_block() {
     // = 0.9292
     assert_eq!(ran.code, Some(0), "{}", ran.stderr);
     assert!(ran.stdout.contains("cells 1  nodes 3") && ran.stdout.contains("min 1.000000e0  max 1.000000e0") && ran.stdout.contains("min 0.9292"), "{}", ran.stdout);
+    // a unit square and the triangle (1,0), (2,0), (1,1) in one surface:
+    // det J 1 on both, scaled Jacobians 1 (the square) and 0.9292
+    let mixed = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 5 1 5\n2 1 0 5\n1\n2\n3\n4\n5\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n$EndNodes\n$Elements\n2 2 1 2\n2 1 3 1\n1 1 2 3 4\n2 1 2 1\n2 2 5 3\n$EndElements\n";
+    std::fs::write(dir.path().join("mixed.msh"), mixed).unwrap();
+    let ran = deformesh(dir.path(), &["quality", "mixed.msh"]);
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+    assert!(ran.stdout.contains("elements 2  nodes 5") && ran.stdout.contains("min >= 1.000000e0") && ran.stdout.contains("min 0.9292  max 1.0000"), "{}", ran.stdout);
     std::fs::write(dir.path().join("prism.msh"), tri.replace("2 1 2 1", "2 1 6 1")).unwrap();
     let ran = deformesh(dir.path(), &["quality", "prism.msh"]);
-    assert_clean_failure(&ran, dir.path(), &["prism.msh", "line 16", "element type 6", "Prisms and pyramids are not curved yet"], &["prism.msh", "tri.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["prism.msh", "line 16", "element type 6", "Prisms and pyramids are not curved yet"], &["mixed.msh", "prism.msh", "tri.msh"]);
 }
 
 #[test]

@@ -7,13 +7,22 @@ Prints one JSON object:
   num_nodes        number of nodes Gmsh loaded
   element_types    {type number: {"name": ..., "count": ...}} over all dims
   physical_names   {dim: [names, in order of physical tag]}
-  elements_2d      {"tags": [...], "minDetJac": [...], "maxDetJac": [...],
-                    "minSJ": [...], "minSIGE": [...], "sampledSJ": [...]},
-                   ordered by element
-                   tag; minSJ is Gmsh's lower bound, sampledSJ the least
-                   det J / (|dx/du| |dx/dv| (|dx/dw|)) of Gmsh's own
-                   Jacobians on the (3p + 1)^dim equispaced points of the
-                   reference element (corners included)
+  elements_2d      {"tags": [...], "types": [...], "minDetJac": [...],
+                    "maxDetJac": [...], "minSJ": [...], "minSIGE": [...],
+                    "sampledSJ": [...], "elements_by_type": {...}}, over
+                   every 2D element whatever its type (a mixed mesh of
+                   quadrangles and triangles: both blocks), ordered by
+                   element tag; types the MSH type number of each;
+                   minSJ is Gmsh's lower bound, sampledSJ the least
+                   signed det J / (|dx/du| |dx/dv| (|dx/dw|)) of Gmsh's
+                   own Jacobians on the points of the reference element
+                   of spacing 1 / (3p) (corners included: (3p + 1)^dim for
+                   quads and hexes, the simplex lattice for triangles and
+                   tets, where the ratio is the raw one on Gmsh's
+                   right-angled reference: an equilateral triangle gives
+                   sin 60 degrees); elements_by_type {type number: {"name",
+                   "count", "invalid" (minDetJac <= 0), "minSJ",
+                   "minSIGE" (the least of each)}}
   elements_3d      the same for the 3D elements (empty lists for a 2D mesh)
 Exits non-zero (with Gmsh's message on stderr) if Gmsh cannot read FILE.
 """
@@ -42,36 +51,76 @@ def physical_names():
 
 
 def elements(dim):
-    """Jacobian-based qualities of every element of dimension dim, by tag."""
-    _, tags, _ = gmsh.model.mesh.getElements(dim=dim)
-    all_tags = sorted(int(t) for ts in tags for t in ts)
-    out = {"tags": all_tags}
+    """Jacobian-based qualities of every element of dimension dim (of
+    every type), by tag."""
+    types, tags, _ = gmsh.model.mesh.getElements(dim=dim)
+    type_of = {int(t): int(ty) for ty, ts in zip(types, tags) for t in ts}
+    all_tags = sorted(type_of)
+    out = {"tags": all_tags, "types": [type_of[t] for t in all_tags]}
     for quality in ("minDetJac", "maxDetJac", "minSJ", "minSIGE"):
         values = gmsh.model.mesh.getElementQualities(all_tags, quality) if all_tags else []
         out[quality] = [float(v) for v in values]
     out["sampledSJ"] = sampled_sj(dim, all_tags)
+    by_type = {}
+    for k, ty in enumerate(out["types"]):
+        b = by_type.setdefault(str(ty), {"name": gmsh.model.mesh.getElementProperties(ty)[0], "count": 0, "invalid": 0,
+                                         "minSJ": float("inf"), "minSIGE": float("inf")})
+        b["count"] += 1
+        b["invalid"] += out["minDetJac"][k] <= 0
+        b["minSJ"] = min(b["minSJ"], out["minSJ"][k])
+        b["minSIGE"] = min(b["minSIGE"], out["minSIGE"][k])
+    out["elements_by_type"] = by_type
     return out
+
+
+def reference_points(t):
+    """The points of spacing 1 / (3p) on the reference element of Gmsh's
+    type t: [-1, 1]^dim for quads and hexes, the unit simplex for
+    triangles and tets (as Gmsh's getJacobians takes them, 3 per point)."""
+    import numpy as np
+
+    _, dim, order, nn, _, nv = gmsh.model.mesh.getElementProperties(t)
+    m = 3 * order
+    if nv == dim + 1:  # a simplex
+        pts = [p for p in np.ndindex(*([m + 1] * dim)) if sum(p) <= m]
+        grid = np.array(pts, dtype=float) / m
+    else:
+        g = np.linspace(-1.0, 1.0, m + 1)
+        grid = np.array(np.meshgrid(*[g] * dim, indexing="ij")).reshape(dim, -1).T
+    return np.hstack([grid, np.zeros((len(grid), 3 - dim))])
 
 
 def sampled_sj(dim, all_tags):
     """Per element (in the order of all_tags), the least scaled Jacobian
-    of Gmsh's own Jacobians on a (3p + 1)^dim equispaced grid."""
+    of Gmsh's own Jacobians on reference_points."""
     import numpy as np  # only here: the rest of the checker needs no numpy
 
     by_tag = {}
     for t in gmsh.model.mesh.getElementTypes(dim=dim):
-        order = gmsh.model.mesh.getElementProperties(t)[2]
-        g = np.linspace(-1.0, 1.0, 3 * order + 1)
-        axes = [g] * dim + [np.zeros(1)] * (3 - dim)
-        grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
-        tags, _ = gmsh.model.mesh.getElementsByType(t)
+        tags, nodes = gmsh.model.mesh.getElementsByType(t)
         if len(tags) == 0:
             continue
-        jac, det, _ = gmsh.model.mesh.getJacobians(t, grid.ravel())
-        # per point, rows are dx/du, dx/dv, dx/dw (the third a normal in 2D)
-        j = np.array(jac).reshape(len(tags), len(grid), 3, 3)[:, :, :dim, :]
-        d = np.array(det).reshape(len(tags), len(grid))
-        sj = (d / np.linalg.norm(j, axis=3).prod(axis=2)).min(axis=1)
+        grid = reference_points(t)
+        jac, _, _ = gmsh.model.mesh.getJacobians(t, grid.ravel())
+        # per point, rows are dx/du, dx/dv, dx/dw
+        j = np.array(jac).reshape(len(tags), len(grid), 3, 3)
+        if dim == 3:
+            d = np.linalg.det(j)
+        else:
+            # Gmsh's determinant of a 2D element is |dx/du x dx/dv| (its
+            # third row the unit normal along that cross product), never
+            # negative: signed here by the side of the cross product from
+            # the normal of the element's straight cell, (x2 - x0) x
+            # (x_last - x1) of its vertices
+            nv = gmsh.model.mesh.getElementProperties(t)[5]
+            nt, xyz, _ = gmsh.model.mesh.getNodes()
+            xs = np.zeros((int(nt.max()) + 1, 3))
+            xs[nt] = np.reshape(xyz, (-1, 3))
+            v = xs[np.reshape(nodes, (len(tags), -1))[:, :nv]]
+            n = np.cross(v[:, 2] - v[:, 0], v[:, nv - 1] - v[:, 1])
+            c = np.cross(j[:, :, 0, :], j[:, :, 1, :])
+            d = np.linalg.norm(c, axis=2) * np.sign(np.einsum("eqc,ec->eq", c, n))
+        sj = (d / np.linalg.norm(j[:, :, :dim, :], axis=3).prod(axis=2)).min(axis=1)
         by_tag.update(zip((int(x) for x in tags), (float(v) for v in sj)))
     return [by_tag[t] for t in all_tags]
 

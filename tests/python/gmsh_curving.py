@@ -9,7 +9,9 @@ HighOrderElastic (Mesh.HighOrderOptimize 4 / 3), timed; prints JSON
 "min_sj" (Gmsh's bound), "boundary_sample_distance" (the largest
 off_shape(points) of 17 x 17 points per quad face of the given surfaces),
 "seconds"}, or {"method", "error"} and exit status 1 when Gmsh throws.
-curve_and_judge_simplices: the same for triangle and tetrahedral meshes."""
+curve_and_judge_simplices: the same for triangle and tetrahedral meshes,
+and for 2D meshes of quadrangles and triangles (over all their elements),
+with the counts per element type too."""
 import json, time
 import gmsh
 
@@ -30,11 +32,14 @@ def _curve(p, method):
 
 
 def _qualities(dim):
-    """The tags of the elements of dimension dim, their minDetJac and minSJ."""
+    """The tags of the elements of dimension dim (of every type), their
+    minDetJac and minSJ, and the name of each one's type."""
     import numpy as np
 
-    tags = np.concatenate(gmsh.model.mesh.getElements(dim)[1])
-    return tags, np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac")), np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+    types, per_type, _ = gmsh.model.mesh.getElements(dim)
+    tags = np.concatenate(per_type)
+    names = np.concatenate([[gmsh.model.mesh.getElementProperties(t)[0]] * len(ts) for t, ts in zip(types, per_type)])
+    return tags, np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac")), np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ")), names
 
 
 def curve_and_judge(p, method, surfaces, off_shape):
@@ -43,7 +48,7 @@ def curve_and_judge(p, method, surfaces, off_shape):
     import numpy as np
 
     secs = _curve(p, method)
-    tags, dj, sj = _qualities(3)
+    tags, dj, sj, _ = _qualities(3)
     qt = gmsh.model.mesh.getElementType("Quadrangle", p)
     uv = [c for i in range(17) for j in range(17) for c in (-1 + i / 8, -1 + j / 8, 0)]
     bf = np.reshape(gmsh.model.mesh.getBasisFunctions(qt, uv, "Lagrange")[1], (289, -1))
@@ -60,14 +65,17 @@ def curve_and_judge(p, method, surfaces, off_shape):
 
 
 def curve_and_judge_simplices(p, method, dim, curves, off_shape):
-    """curve_and_judge for a mesh of triangles (dim 2: `curves` are the
-    wall's curves, each line sampled at 17 points) or tetrahedra (dim 3:
-    `curves` are the wall's surfaces, each triangle sampled on the lattice
-    of 17 points per edge); off_shape(points) the distance to the wall."""
+    """curve_and_judge for a mesh of triangles, or of quadrangles and
+    triangles (dim 2: `curves` are the wall's curves, each line sampled at
+    17 points), or of tetrahedra (dim 3: `curves` are the wall's surfaces,
+    each triangle sampled on the lattice of 17 points per edge);
+    off_shape(points) the distance to the wall. Besides curve_and_judge's
+    figures (over all the elements of dimension dim), "elements_by_type"
+    and "invalid_by_type" ({type name: count}, e.g. "Triangle 10")."""
     import numpy as np
 
     secs = _curve(p, method)
-    tags, dj, sj = _qualities(dim)
+    tags, dj, sj, names = _qualities(dim)
     m = 16
     if dim == 2:
         ft = gmsh.model.mesh.getElementType("Line", p)
@@ -84,5 +92,8 @@ def curve_and_judge_simplices(p, method, dim, curves, off_shape):
         nodes = np.reshape(gmsh.model.mesh.getElementsByType(ft, c)[1], (-1, bf.shape[1]))
         pts = np.einsum("qn,enc->eqc", bf, x[nodes])
         worst = max(worst, float(off_shape(pts).max()))
+    kinds = sorted(set(names))
     print(json.dumps({"method": method, "order": p, "elements": int(len(tags)), "invalid": int((dj <= 0).sum()),
-                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs}))
+                      "min_sj": float(sj.min()), "boundary_sample_distance": worst, "seconds": secs,
+                      "elements_by_type": {k: int((names == k).sum()) for k in kinds},
+                      "invalid_by_type": {k: int(((names == k) & (dj <= 0)).sum()) for k in kinds}}))

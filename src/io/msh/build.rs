@@ -15,7 +15,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, PlaneMesh, SolidMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, MixedPlaneMesh, PlaneCell, PlaneMesh, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -84,6 +84,49 @@ impl Raw {
         Ok((mesh, cells.iter().map(|c| c.0).collect()))
     }
 
+    /// The linear plane mesh of quads and triangles together (z must be
+    /// 0), cells in tag order, and its cells' element tags.
+    pub fn mixed_plane_mesh(&self) -> Result<(MixedPlaneMesh, Vec<u64>), MshError> {
+        self.check(LINEAR[0])?;
+        self.in_plane()?;
+        self.plane_kinds()?;
+        let cells = self.by_tag(2);
+        let (part_names, edges) = self.boundary(1);
+        let cell = |n: &[usize]| match n.len() {
+            3 => PlaneCell::Triangle([n[0], n[1], n[2]]),
+            _ => PlaneCell::Quad([n[0], n[1], n[2], n[3]]),
+        };
+        let mesh = MixedPlaneMesh {
+            nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
+            cells: cells.iter().map(|c| cell(c.2)).collect(),
+            edges: edges.iter().map(|&(nodes, part, _)| BoundaryEdge { nodes: nodes.try_into().expect("2-node lines"), part }).collect(),
+            part_names,
+        };
+        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+    }
+
+    /// Fails unless every cell of a plane mesh is a triangle or a quad and
+    /// every boundary element a line.
+    fn plane_kinds(&self) -> Result<(), MshError> {
+        for b in self.blocks.iter().filter(|b| (1..=2).contains(&b.kind.dim)) {
+            let (what, expected) = if b.kind.dim == 2 { ("cells", Shape::Quadrilateral) } else { ("boundary elements", Shape::Line) };
+            if !matches!((b.kind.dim, b.kind.shape), (2, Shape::Triangle | Shape::Quadrilateral) | (1, Shape::Line)) {
+                let why = "a plane mesh holds triangles and quads, bounded by lines";
+                return Err(MshError::MixedShapes { at: b.at, what, expected, found: b.kind.shape, why });
+            }
+        }
+        Ok(())
+    }
+
+    /// The kinds of cell (dimension `dim`) the blocks hold, in the order of
+    /// [`Shape`].
+    pub fn cell_shapes(&self, dim: usize) -> Vec<Shape> {
+        let mut out: Vec<Shape> = self.blocks.iter().filter(|b| b.kind.dim == dim).map(|b| b.kind.shape).collect();
+        out.sort();
+        out.dedup();
+        out
+    }
+
     /// The refusal of the first cell block (dimension `dim`): its element
     /// type is not one `accepted` names.
     pub fn refused(&self, dim: usize, accepted: &'static str) -> MshError {
@@ -103,8 +146,10 @@ impl Raw {
         for b in self.blocks.iter().filter(|b| b.kind.dim + 1 >= dim && b.kind.dim <= dim) {
             let (what, expected) = if b.kind.dim == dim { ("cells", cells) } else { ("boundary elements", facet) };
             if b.kind.shape != expected {
-                let why = if b.kind.dim == dim {
-                    "meshes of one kind of cell are curved for now (mixed meshes are next); mesh all of the domain with one kind"
+                let why = if b.kind.dim == dim && dim == 2 {
+                    "this reads one kind of cell (Algorithm 1's `run` deforms meshes of one kind); `curve` takes quads and triangles together"
+                } else if b.kind.dim == dim {
+                    "solids of one kind of cell are curved for now (mixed solid meshes are next); mesh all of the solid with one kind"
                 } else {
                     "the boundary elements must be faces of the cells"
                 };
@@ -144,8 +189,14 @@ impl Raw {
         };
         let p = first.kind.order;
         let shape = first.kind.shape;
-        self.one_shape(D, shape)?;
-        let (cell_perm, face_perm) = (gmsh_perm(shape, p), gmsh_perm(shape.facet_shape(), p));
+        if D == 2 {
+            self.plane_kinds()?;
+        } else {
+            self.one_shape(D, shape)?;
+        }
+        let face_perm = gmsh_perm(shape.facet_shape(), p);
+        // each cell by its own block's kind (a plane mesh may mix them)
+        let perms: HashMap<Shape, Vec<usize>> = self.cell_shapes(D).into_iter().map(|s| (s, gmsh_perm(s, p))).collect();
         let (part_names, faces) = self.boundary(D - 1);
         let blocks = cells.iter().map(|c| c.1).chain(faces.iter().map(|f| f.2));
         if let Some(b) = blocks.into_iter().find(|b| b.kind.order != p) {
@@ -156,7 +207,7 @@ impl Raw {
             p,
             spacing: Spacing::Equispaced,
             nodes: self.nodes.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
-            cells: cells.iter().map(|c| from_format(&cell_perm, c.2)).collect(),
+            cells: cells.iter().map(|c| from_format(&perms[&c.1.kind.shape], c.2)).collect(),
             boundary: faces.iter().map(|&(nodes, part, _)| CurvedBoundary { nodes: from_format(&face_perm, nodes), part }).collect(),
             part_names,
         };

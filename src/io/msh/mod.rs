@@ -355,6 +355,8 @@ pub enum AnyMesh {
     Hexes(HexMesh),
     /// Linear tetrahedra.
     Tetrahedra(TetMesh),
+    /// Linear quads and triangles together.
+    Mixed2(crate::mesh::MixedPlaneMesh),
     /// Quads or triangles of order 2..=4.
     Curved2(CurvedMesh<2>),
     /// Hexes or tetrahedra of order 2..=4.
@@ -388,6 +390,7 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
         (3, 1) if raw.cell_shape(3) == Some(Shape::Tetrahedron) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Tetrahedra(m), t))?,
         (3, 1) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
+        (_, 1) if raw.cell_shapes(2).len() > 1 => raw.mixed_plane_mesh().map(|(m, t)| (AnyMesh::Mixed2(m), t))?,
         (_, 1) if raw.cell_shape(2) == Some(Shape::Triangle) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Triangles(m), t))?,
         (_, 1) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,
         _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved2(m), t))?,

@@ -1,6 +1,7 @@
 //! Tests of the MSH reader and writer, ASCII and binary, all orders.
 
 use super::*;
+use crate::io::layout::tests::mixed2;
 use crate::io::vtu::VtuError;
 use crate::mesh::curved::tests::{bend2, bend3};
 use crate::mesh::element::Spacing;
@@ -497,6 +498,48 @@ fn bad_meshes_and_files_are_rejected() {
         CurvedMesh::<2>::parse_msh(&text),
         Err(MshError::UnsupportedVersion { .. })
     ));
+}
+
+/// The mixed test mesh's cells as a file gives them back: each cell's
+/// shape, order and nodes (crate order), by element tag.
+fn cells_read_back(text: &str) -> Vec<(Shape, usize, Vec<usize>)> {
+    let layout = read::parse(text.as_bytes(), CURVED[1]).unwrap().layout();
+    let mut cells: Vec<_> = layout.elements.into_iter().filter(|e| e.shape.dim() == 2).collect();
+    cells.sort_by_key(|e| e.tag);
+    cells.into_iter().map(|e| (e.shape, e.order, e.nodes)).collect()
+}
+
+/// The mixed test mesh's cells as they should come back.
+fn cells_of(m: &CurvedMesh<2>) -> Vec<(Shape, usize, Vec<usize>)> {
+    (0..m.cells.len()).map(|c| (m.cell_shape(c), m.p, m.cells[c].clone())).collect()
+}
+
+/// One entity holding quads and triangles: one block of each kind, each
+/// with its own type and Gmsh node order, read back to the same cells.
+#[test]
+fn a_mixed_mesh_is_written_in_one_block_per_kind() {
+    for p in [2, 3] {
+        let m = mixed2(p);
+        let text = m.msh_string().unwrap();
+        // 8 boundary lines, then triangles and quads on surface 1
+        assert!(text.contains("$Elements\n3 12 1 12\n"), "p = {p}");
+        for shape in [Shape::Triangle, Shape::Quadrilateral] {
+            assert!(text.contains(&format!("\n2 1 {} 2\n", msh_type(shape, p))), "p = {p}: {shape:?} block");
+        }
+        assert_eq!(cells_read_back(&text), cells_of(&m), "p = {p}");
+    }
+}
+
+/// `parse_any` gives the mixed mesh back whole.
+#[test]
+fn a_mixed_mesh_reads_back_through_parse_any() {
+    for p in [2, 3] {
+        let m = mixed2(p);
+        let tagged = parse_any(m.msh_string().unwrap().as_bytes(), false).unwrap();
+        let AnyMesh::Curved2(back) = tagged.mesh else { panic!("p = {p}: not a 2D curved mesh") };
+        assert_eq!(cells_of(&back), cells_of(&m), "p = {p}");
+        assert_eq!((back.nodes, back.boundary), (m.nodes, m.boundary), "p = {p}");
+    }
 }
 
 /// The file holds the equispaced nodes of a Gauss–Lobatto mesh.

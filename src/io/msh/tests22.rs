@@ -1,7 +1,9 @@
 //! Tests of the MSH 2.2 reader and writer.
 
 use super::*;
+use crate::io::layout::tests::mixed2;
 use crate::io::layout::{Layout, Periodic};
+use crate::mesh::element::Shape;
 use crate::mesh::curved::tests::{bend2, bend3};
 use crate::mesh::element::Spacing;
 use crate::mesh::BoundaryEdge;
@@ -166,7 +168,7 @@ fn reader_errors_name_the_line() {
         let line = line_of(&text, at);
         assert!(msg.starts_with(&format!("line {line}: ")) && msg.contains(words), "{to:?}: expected line {line} and {words:?}: {msg}");
     }
-    assert!(error_of(&SQUARES.replacen("8 3 2 3 1 2 3 6 5", "8 2 2 3 1 2 3 6", 1)).contains("mixed meshes are next"));
+    assert!(error_of(&SQUARES.replacen("8 3 2 3 1 2 3 6 5", "8 2 2 3 1 2 3 6", 1)).contains("one kind of cell"));
     // truncated in an element: at the last line
     let cut = &SQUARES[..SQUARES.find("8 3 2 3 1 2 3").unwrap() + 12];
     assert_eq!(error_of(cut), format!("line {}: file truncated: expected a node tag of an element", cut.lines().count()));
@@ -245,6 +247,22 @@ fn layouts_survive_a_round_trip() {
         let layout = Layout::generated(&h);
         assert_eq!(kept(&round_trip(&layout)), kept(&layout), "hex p = {p}");
         assert_eq!(CurvedMesh::<3>::parse_msh(layout_text_22(&layout)).unwrap(), h, "hex p = {p}");
+    }
+}
+
+/// MSH 2.2 writes every element with its own type and node order: the
+/// quads and triangles of one entity come back as they were.
+#[test]
+fn a_mixed_layout_survives_a_round_trip() {
+    for p in [2, 3] {
+        let layout = Layout::generated(&mixed2(p));
+        let back = round_trip(&layout);
+        assert_eq!(kept(&back), kept(&layout), "p = {p}");
+        let text = layout_text_22(&layout);
+        let elements = text.split("$Elements\n").nth(1).unwrap().lines().skip(1).take(12);
+        let types: Vec<i64> = elements.map(|l| l.split(' ').nth(1).unwrap().parse().unwrap()).collect();
+        let cells = [Shape::Quadrilateral, Shape::Quadrilateral, Shape::Triangle, Shape::Triangle].map(|s| msh_type(s, p));
+        assert_eq!(types[8..], cells, "p = {p}: each cell with its own type");
     }
 }
 

@@ -151,12 +151,15 @@ fn push_nodes(out: &mut String, layout: &Layout) {
     out.push_str("$EndNodes\n");
 }
 
-/// One block per (dimension, entity, type), nodes in Gmsh's order.
+/// One block per (dimension, entity, type), nodes in Gmsh's order. The
+/// shape is in the key: one entity may hold quads and triangles (a mixed
+/// mesh), and a block takes its type and node order from its first
+/// element.
 fn push_elements(out: &mut String, layout: &Layout) {
     let mut order: Vec<usize> = (0..layout.elements.len()).collect();
     let key = |e: usize| {
         let el = &layout.elements[e];
-        (el.shape.dim(), el.entity, el.order)
+        (el.shape.dim(), el.entity, el.shape, el.order)
     };
     order.sort_by_key(|&e| key(e));
     let blocks = order.chunk_by(|&a, &b| key(a) == key(b)).collect::<Vec<_>>();

@@ -255,6 +255,21 @@ impl Shape {
         }
     }
 
+    /// The cell shape of dimension `dim` whose order-`p` element has
+    /// `count` nodes, if one has: the counts of the kinds of one dimension
+    /// differ at every order (2D: 3, 4; 6, 9; 10, 16; 15, 25 — 3D: tet,
+    /// pyramid, prism, hex 4, 5, 6, 8; 10, 14, 18, 27; …), so a mixed mesh
+    /// tells each cell's kind by its node count.
+    pub fn with_nodes(dim: usize, p: usize, count: usize) -> Option<Shape> {
+        let kinds: &[Shape] = match dim {
+            1 => &[Shape::Line],
+            2 => &[Shape::Triangle, Shape::Quadrilateral],
+            3 => &[Shape::Tetrahedron, Shape::Hexahedron, Shape::Prism, Shape::Pyramid],
+            _ => &[],
+        };
+        kinds.iter().copied().find(|s| s.num_nodes(p) == count)
+    }
+
     /// The measure (length, area, volume) of the reference cell; 1 for a
     /// point.
     pub fn volume(self) -> f64 {
@@ -395,6 +410,25 @@ mod tests {
             assert!((vol - shape.volume()).abs() < 1e-15, "{shape:?}: {vol}");
         }
         assert_eq!(Shape::Pyramid.vertices()[4], [0.5, 0.5, 1.0]);
+    }
+
+    /// Each kind of a dimension is told by its node count at p = 1..=4
+    /// (the counts of Gmsh's element types 3/2, 10/9, 36/21, 37/23 and
+    /// 5/4/7/6, 12/11/14/13, 92/29/118/90, 93/30/119/91).
+    #[test]
+    fn node_counts_tell_the_kinds_of_a_dimension_apart() {
+        let gmsh = [(2, [(3, 4), (6, 9), (10, 16), (15, 25)].as_slice()), (3, &[(4, 8), (10, 27), (20, 64), (35, 125)])];
+        for (dim, counts) in gmsh {
+            for (k, &(simplex, tensor)) in counts.iter().enumerate() {
+                let p = k + 1;
+                assert_eq!(Shape::with_nodes(dim, p, simplex), Some(if dim == 2 { Shape::Triangle } else { Shape::Tetrahedron }));
+                assert_eq!(Shape::with_nodes(dim, p, tensor), Some(if dim == 2 { Shape::Quadrilateral } else { Shape::Hexahedron }));
+            }
+        }
+        for (p, prism, pyramid) in [(1, 6, 5), (2, 18, 14), (3, 40, 30), (4, 75, 55)] {
+            assert_eq!((Shape::with_nodes(3, p, prism), Shape::with_nodes(3, p, pyramid)), (Some(Shape::Prism), Some(Shape::Pyramid)));
+        }
+        assert_eq!(Shape::with_nodes(2, 2, 8), None);
     }
 
     #[test]
