@@ -747,7 +747,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
         AnyMesh::Quads(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         AnyMesh::Triangles(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         // curve_mixed names tangled cells by their coarse cell
-        AnyMesh::Mixed2(mesh) => curve_mixed_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
+        AnyMesh::Mixed2(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
@@ -770,37 +770,50 @@ where
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, progress)
 }
 
-/// `curve` on a plane mesh of quads or triangles.
-fn curve_plane<const N: usize>(
-    mut mesh: PlaneMesh<N>,
+/// A linear plane mesh as `curve` takes it: quads, triangles or both.
+trait PlaneInput: Curvable<2> {
+    /// See [`PlaneMesh::orient_counter_clockwise`].
+    fn orient(&mut self) -> usize;
+    /// The part names and the boundary edges (to keep one copy of each).
+    fn boundary(&mut self) -> (&[String], &mut Vec<crate::mesh::BoundaryEdge>);
+}
+
+impl<const N: usize> PlaneInput for PlaneMesh<N> {
+    fn orient(&mut self) -> usize {
+        self.orient_counter_clockwise()
+    }
+    fn boundary(&mut self) -> (&[String], &mut Vec<crate::mesh::BoundaryEdge>) {
+        (&self.part_names, &mut self.edges)
+    }
+}
+
+impl PlaneInput for MixedPlaneMesh {
+    fn orient(&mut self) -> usize {
+        self.orient_counter_clockwise()
+    }
+    fn boundary(&mut self) -> (&[String], &mut Vec<crate::mesh::BoundaryEdge>) {
+        (&self.part_names, &mut self.edges)
+    }
+}
+
+/// `curve` on a plane mesh of quads, triangles or both.
+fn curve_plane(
+    mut mesh: impl PlaneInput,
     geometry: &crate::app::bind::GeometryFile,
     gfile: &str,
     job: (&CurveJob, &crate::io::layout::Layout),
     progress: &mut impl FnMut(Progress),
 ) -> Result<CurveReport, RunError> {
     // Gmsh may write a surface's cells clockwise (by its normal)
-    let turned = mesh.orient_counter_clockwise();
-    let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, gfile)?;
-    geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), gfile)?;
-    let (mesh, shared) = one_group_per_mesh_facet(&mesh, &unbound, gfile)?;
-    curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, progress)
-}
-
-/// `curve` on a plane mesh of quads and triangles together.
-fn curve_mixed_plane(
-    mut mesh: MixedPlaneMesh,
-    geometry: &crate::app::bind::GeometryFile,
-    gfile: &str,
-    job: (&CurveJob, &crate::io::layout::Layout),
-    progress: &mut impl FnMut(Progress),
-) -> Result<CurveReport, RunError> {
-    let turned = mesh.orient_counter_clockwise();
-    let (parts, unbound) = geometry.parts::<2>(&mesh.part_names, gfile)?;
-    geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.edges.iter().map(|e| e.part), mesh.part_names.len()), gfile)?;
-    let facets = mesh.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
-    let (kept, shared) = one_group_per_facet(facets, &mesh.part_names, &unbound, gfile)?;
+    let turned = mesh.orient();
+    let (names, edges) = mesh.boundary();
+    let names = names.to_vec();
+    let (parts, unbound) = geometry.parts::<2>(&names, gfile)?;
+    geometry.check_carried(&names, &crate::app::bind::carried(edges.iter().map(|e| e.part), names.len()), gfile)?;
+    let facets = edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
+    let (kept, shared) = one_group_per_facet(facets, &names, &unbound, gfile)?;
     if let Some(kept) = kept {
-        mesh.edges = kept.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
+        *edges = kept.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
     }
     curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, progress)
 }
