@@ -126,8 +126,11 @@ pub struct Subdivision<M, const D: usize> {
 
 impl<M, const D: usize> Subdivision<M, D> {
     /// The kind of coarse element `e`, told by its node count (a mixed
-    /// mesh holds quads and triangles).
+    /// plane mesh holds quads and triangles; a solid is of one kind).
     pub fn element_shape(&self, e: usize) -> Shape {
+        if D != 2 {
+            return self.shape;
+        }
         Shape::with_nodes(D, self.p, self.elements[e].len()).unwrap_or(self.shape)
     }
 

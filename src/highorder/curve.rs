@@ -582,6 +582,7 @@ pub fn curve_mixed(coarse: &MixedPlaneMesh, parts: &[BoundaryPart<2>], opts: &Cu
     curve_subdivided(&sub, (&coarse.part_names, coarse.largest_aspect(), clock), parts, opts, progress).map_err(|e| match e {
         CurveError::Deform(DeformError::Tangled { t, dt, cells }) => {
             let mut cells: Vec<usize> = cells.iter().map(|&c| owner[c]).collect();
+            cells.sort_unstable();
             cells.dedup();
             CurveError::Deform(DeformError::Tangled { t, dt, cells })
         }

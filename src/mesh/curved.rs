@@ -158,11 +158,12 @@ impl<const D: usize> CurvedMesh<D> {
     }
 
     /// The kind of cell `c`, told by its node count ([`Shape::with_nodes`]):
-    /// a mixed mesh holds cells of other kinds than [`Self::shape`]. A
-    /// count no kind has (which [`Self::validate`] refuses) gives `shape`.
+    /// a mixed plane mesh holds triangles and quads. A 3D mesh is of one
+    /// kind, and a count no kind has (which [`Self::validate`] refuses)
+    /// gives `shape` too.
     pub fn cell_shape(&self, c: usize) -> Shape {
         let n = self.cells[c].len();
-        if n == self.shape.num_nodes(self.p) {
+        if D != 2 || n == self.shape.num_nodes(self.p) {
             return self.shape;
         }
         Shape::with_nodes(D, self.p, n).unwrap_or(self.shape)

@@ -121,7 +121,8 @@ impl Raw {
     /// The kinds of cell (dimension `dim`) the blocks hold, in the order of
     /// [`Shape`].
     pub fn cell_shapes(&self, dim: usize) -> Vec<Shape> {
-        let mut out: Vec<Shape> = self.blocks.iter().filter(|b| b.kind.dim == dim).map(|b| b.kind.shape).collect();
+        // an empty block holds no cell of its kind
+        let mut out: Vec<Shape> = self.blocks.iter().filter(|b| b.kind.dim == dim && !b.tags.is_empty()).map(|b| b.kind.shape).collect();
         out.sort();
         out.dedup();
         out
