@@ -41,21 +41,34 @@ fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, Pat
 /// `rel` of our certified bound; its sampled scaled Jacobian (minSIGE) is
 /// within `sj` of ours. Returns the largest differences.
 fn gmsh_agrees_simplex<const D: usize>(file: &Path, ty: i64, count: usize, rel: f64, sj: f64) -> (f64, f64) {
+    gmsh_agrees_kinds::<D>(file, &[(ty, count, 1.0)], rel, Some(sj))
+}
+
+/// [`gmsh_agrees_simplex`] on a file of several kinds, `count` cells of
+/// each MSH type `ty`, whose det J Gmsh gives as `scale` times ours (a
+/// quarter on quads: its reference square is [-1,1]²); the scaled
+/// Jacobians are compared when `sj` is given.
+fn gmsh_agrees_kinds<const D: usize>(file: &Path, kinds: &[(i64, usize, f64)], rel: f64, sj: Option<f64>) -> (f64, f64) {
     let g = common::run_checker("check_msh.py", file);
-    assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
+    for &(ty, count, _) in kinds {
+        assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
+    }
     let block = if D == 2 { &g["elements_2d"] } else { &g["elements_3d"] };
-    let (gmin, gsige) = (common::floats(&block["minDetJac"]), common::floats(&block["minSIGE"]));
+    let (gmin, gsige, types) = (common::floats(&block["minDetJac"]), common::floats(&block["minSIGE"]), common::floats(&block["types"]));
     let ours = common::our_certificates::<D>(file);
-    assert_eq!(gmin.len(), ours.len());
+    assert_eq!((gmin.len(), types.len()), (ours.len(), ours.len()));
     let (mut worst_det, mut worst_sj) = (0.0f64, 0.0f64);
-    for (k, ((g, s), o)) in gmin.iter().zip(&gsige).zip(&ours).enumerate() {
-        assert!(*g > 0.0 && o.valid, "element {k}: Gmsh's minDetJac {g}, ours {o:?}");
-        assert!(*g <= o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", o.min_det_upper);
-        worst_det = worst_det.max((o.min_det_lower - g).abs() / o.min_det_lower);
+    for (k, (((g, s), ty), o)) in gmin.iter().zip(&gsige).zip(&types).zip(&ours).enumerate() {
+        let scale = kinds.iter().find(|t| t.0 == *ty as i64).map_or(1.0, |t| t.2);
+        assert!(*g > 0.0 && o.valid, "element {k} (type {ty}): Gmsh's minDetJac {g}, ours {o:?}");
+        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
+        worst_det = worst_det.max((scale * o.min_det_lower - g).abs() / (scale * o.min_det_lower));
         worst_sj = worst_sj.max((s - o.min_scaled_jacobian).abs());
     }
     assert!(worst_det < rel, "Gmsh's minDetJac and ours differ by {worst_det:e} relative");
-    assert!(worst_sj < sj, "Gmsh's minSIGE and our scaled Jacobian differ by {worst_sj:e}");
+    if let Some(sj) = sj {
+        assert!(worst_sj < sj, "Gmsh's minSIGE and our scaled Jacobian differ by {worst_sj:e}");
+    }
     (worst_det, worst_sj)
 }
 
@@ -123,7 +136,7 @@ fn a_mixed_quad_and_triangle_layer_curves_validly_at_p2_p3_p4_and_gmsh_agrees() 
         assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
         let checked = group_nodes_on::<2>(&out, "wall", circle, 1e-12);
         assert!(checked > 50 * (p + 1), "{checked} wall nodes");
-        let worst = gmsh_agrees_mixed(&out, [(tri, kinds[0]), (quad, kinds[1])], 1e-3);
+        let (worst, _) = gmsh_agrees_kinds::<2>(&out, &[(tri, kinds[0], 1.0), (quad, kinds[1], 0.25)], 1e-3, None);
         let ours = r.quality.boundary_error["wall"].samples;
         let theirs = gmsh["boundary_sample_distance"].as_f64().unwrap();
         eprintln!(
@@ -135,31 +148,6 @@ fn a_mixed_quad_and_triangle_layer_curves_validly_at_p2_p3_p4_and_gmsh_agrees() 
             assert!(gmsh["invalid"].as_u64().unwrap() > 0, "Gmsh's setOrder leaves this mesh invalid");
         }
     }
-}
-
-/// The real Gmsh reads the mixed `file`, finds `count` cells of each MSH
-/// type `ty` and every cell valid; its minDetJac is never above a value
-/// our det J takes and within `rel` of our certified bound (on quads a
-/// quarter of ours: its reference square is [-1,1]²). Returns the
-/// largest relative difference.
-fn gmsh_agrees_mixed(file: &Path, kinds: [(i64, usize); 2], rel: f64) -> f64 {
-    let g = common::run_checker("check_msh.py", file);
-    for (ty, count) in kinds {
-        assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
-    }
-    let block = &g["elements_2d"];
-    let (gmin, types) = (common::floats(&block["minDetJac"]), common::floats(&block["types"]));
-    let ours = common::our_certificates::<2>(file);
-    assert_eq!((gmin.len(), types.len()), (ours.len(), ours.len()));
-    let mut worst = 0.0f64;
-    for (k, ((g, ty), o)) in gmin.iter().zip(&types).zip(&ours).enumerate() {
-        let scale = if *ty as i64 == kinds[1].0 { 0.25 } else { 1.0 };
-        assert!(*g > 0.0 && o.valid, "element {k} (type {ty}): Gmsh's minDetJac {g}, ours {o:?}");
-        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
-        worst = worst.max((scale * o.min_det_lower - g).abs() / (scale * o.min_det_lower));
-    }
-    assert!(worst < rel, "Gmsh's minDetJac and ours differ by {worst:e} relative");
-    worst
 }
 
 #[test]
