@@ -579,7 +579,7 @@ pub fn curve_mixed(coarse: &MixedPlaneMesh, parts: &[BoundaryPart<2>], opts: &Cu
     let parts = on_shape_parts(&coarse.nodes, &facets, &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed(coarse, opts.order, opts.spacing)?;
-    curve_subdivided(&sub, (&coarse.part_names, coarse.largest_aspect(), clock), parts, opts, progress).map_err(|e| match e {
+    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| match e {
         CurveError::Deform(DeformError::Tangled { t, dt, cells }) => {
             let mut cells: Vec<usize> = cells.iter().map(|&c| owner[c]).collect();
             cells.sort_unstable();
@@ -729,13 +729,14 @@ fn starts_with_factor<const D: usize>(flow: &DeformOptions, aspect: f64, unknown
 /// The largest ratio, over the cells, of the longest to the shortest
 /// distance between two of a cell's corners (1.4 – 1.7 for squares and
 /// cubes; the layer's length over its height in a boundary layer).
-fn largest_aspect<const D: usize, const N: usize>(nodes: &[[f64; D]], cells: &[[usize; N]]) -> f64 {
+fn largest_aspect<const D: usize, C: AsRef<[usize]> + Sync>(nodes: &[[f64; D]], cells: &[C]) -> f64 {
     cells
         .par_iter()
         .map(|c| {
+            let c = c.as_ref();
             let (mut short, mut long) = (f64::INFINITY, 0.0f64);
-            for a in 0..N {
-                for b in a + 1..N {
+            for a in 0..c.len() {
+                for b in a + 1..c.len() {
                     let d = crate::numeric::dist2(nodes[c[a]], nodes[c[b]]);
                     (short, long) = (short.min(d), long.max(d));
                 }
@@ -1145,6 +1146,19 @@ mod tests {
     /// dense sampling of det J (the lower bound is below every sample, the
     /// attained value is not far above the smallest, and valid elements
     /// have no sample ≤ 0).
+    /// Over quads and triangles alike: a ½ × 1 quad has corners ½ apart
+    /// and 1.118 on its diagonal; the triangle (½,0), (1,0), (½,1) has the
+    /// same shortest and longest sides; a unit square's ratio is √2.
+    #[test]
+    fn largest_aspect_takes_cells_of_any_kind() {
+        use crate::mesh::PlaneCell;
+        let nodes = [[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 1.0]];
+        let cells = [PlaneCell::Quad([0, 1, 4, 3]), PlaneCell::Triangle([1, 2, 4])];
+        assert!((largest_aspect(&nodes, &cells) - 1.25f64.sqrt() / 0.5).abs() < 1e-15);
+        assert!((largest_aspect(&nodes, &[[1, 2, 4]]) - 1.25f64.sqrt() / 0.5).abs() < 1e-15);
+        assert!((largest_aspect(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], &[[0, 1, 2, 3]]) - 2f64.sqrt()).abs() < 1e-15);
+    }
+
     #[test]
     fn certificate_agrees_with_dense_sampling() {
         let config = Config { cases: 6, failure_persistence: None, ..Config::default() };

@@ -15,6 +15,12 @@ pub enum PlaneCell {
     Quad([usize; 4]),
 }
 
+impl AsRef<[usize]> for PlaneCell {
+    fn as_ref(&self) -> &[usize] {
+        self.nodes()
+    }
+}
+
 impl PlaneCell {
     /// The corners in cyclic order.
     pub fn nodes(&self) -> &[usize] {
@@ -75,23 +81,6 @@ impl MixedPlaneMesh {
         }
         turned
     }
-
-    /// The largest ratio, over the cells, of the longest to the shortest
-    /// distance between two corners (the layer's length over its height in
-    /// a boundary layer).
-    pub fn largest_aspect(&self) -> f64 {
-        let aspect = |c: &[usize]| {
-            let (mut short, mut long) = (f64::INFINITY, 0.0f64);
-            for a in 0..c.len() {
-                for b in a + 1..c.len() {
-                    let d = crate::numeric::dist2(self.nodes[c[a]], self.nodes[c[b]]);
-                    (short, long) = (short.min(d), long.max(d));
-                }
-            }
-            (long / short).sqrt()
-        };
-        self.cells.iter().map(|c| aspect(c.nodes())).fold(0.0, f64::max)
-    }
 }
 
 #[cfg(test)]
@@ -115,7 +104,5 @@ mod tests {
         assert_eq!(m.orient_counter_clockwise(), 2);
         assert_eq!(m.cells, vec![PlaneCell::Quad([0, 1, 4, 3]), PlaneCell::Triangle([1, 2, 5]), PlaneCell::Triangle([1, 5, 4])]);
         assert_eq!((m.count(Shape::Quadrilateral), m.count(Shape::Triangle)), (1, 2));
-        // the quad is ½ × 1: corners 1 apart and 1.118 on the diagonal
-        assert!((m.largest_aspect() - 1.25f64.sqrt() / 0.5).abs() < 1e-15);
     }
 }
