@@ -276,7 +276,11 @@ pub fn cell_quadrature<const D: usize, const N: usize>() -> impl Iterator<Item =
 /// The pattern records, per cell and pair of its nodes, where that run
 /// starts in the row: assembly adds an element matrix with no search.
 pub struct DivCurlSystem<const D: usize = 2, const N: usize = 4> {
+    /// The cells with a free unknown (a cell whose nodes are all
+    /// prescribed adds nothing to the reduced system: Algorithm 2's band
+    /// holds most of a mesh), and their numbers in the mesh.
     cells: Vec<[usize; N]>,
+    ids: Vec<usize>,
     /// Blocks of consecutive cells, grouped so that blocks of one colour
     /// share no node.
     colours: Vec<Vec<Range<usize>>>,
@@ -305,6 +309,9 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
             first[i + 1] = first[i] + free[i];
         }
         let n = first[nodes] as usize;
+        let ids: Vec<usize> = (0..cells.len()).filter(|&c| cells[c].iter().any(|&v| free[v] > 0)).collect();
+        let cells: Vec<[usize; N]> = ids.iter().map(|&c| cells[c]).collect();
+        let cells = &cells[..];
         let dof: Vec<[u32; D]> =
             constraints.iter().zip(&first).map(|(c, &f)| std::array::from_fn(|k| if k < c.fixed { NONE } else { f + (k - c.fixed) as u32 })).collect();
         let neighbours = node_neighbours(cells, &free);
@@ -340,6 +347,7 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
         let matrix = Csr { nrows: n, ncols: n, val: vec![0.0; col.len()], row_ptr, col };
         DivCurlSystem {
             cells: cells.to_vec(),
+            ids,
             colours: colour_blocks(cells, nodes, (cells.len() / 64).clamp(8, CELLS_PER_BLOCK)),
             fixed_counts: constraints.iter().map(|c| c.fixed).collect(),
             dof,
@@ -383,7 +391,7 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
         self.rhs.par_iter_mut().for_each(|v| *v = 0.0);
         let values = SyncPtr(self.matrix.val.as_mut_ptr());
         let rhs = SyncPtr(self.rhs.as_mut_ptr());
-        let (cells, dof, w) = (&self.cells, &self.dof, self.div_weight);
+        let (cells, ids, dof, w) = (&self.cells, &self.ids, &self.dof, self.div_weight);
         let (row_ptr, offsets) = (&self.matrix.row_ptr, &self.offsets);
         for group in &self.colours {
             group.par_iter().try_for_each(|block| {
@@ -391,7 +399,7 @@ impl<const D: usize, const N: usize> DivCurlSystem<D, N> {
                     let cell = &cells[c];
                     let p = cell.map(|n| nodes[n]);
                     let cons = cell.map(|n| constraints[n]);
-                    let (k, f) = element(c, &p, &cons, w, &g)?;
+                    let (k, f) = element(ids[c], &p, &cons, w, &g)?;
                     let at = Scatter { rows: cell.map(|n| dof[n]), row_ptr, offsets: &offsets[c * N * N..(c + 1) * N * N] };
                     // Blocks of one colour share no node, hence no matrix
                     // row and no rhs entry: these writes never race.

@@ -655,6 +655,61 @@ fn facet_nodes<const D: usize>(q: &[usize], p: usize, t: &[f64], spacing: Spacin
 /// correction (see `RefineBoundary::hold_beyond_band`).
 pub const SETTLE_BAND: f64 = 30.0;
 
+/// Algorithm 2 solves only within this many bend lengths (about a facet's
+/// size along the wall) of the new nodes of the moving parts
+/// ([`RefineMesh::band`]); the nodes beyond are held.
+/// Why: the motion is the bulge of the curved facets, and it fades away
+/// from the wall: by 3–4× per cell on the ball octant at p = 3
+/// (`../shared/notes`), by about 1.6× per bend length on the extruded
+/// cylinder (2.4e-2 of h on the wall, 1.4e-3 at 4–6 h, 1.6e-4 beyond 8).
+/// Measured against the whole-mesh solve, relative change of the certified
+/// min det J at 4 / 8 / 12 bend lengths: ball octant p = 3 8e-7 / 4e-11 /
+/// 0; extruded 1e-3 layer p = 2 1.5e-4 / 3.3e-7 / 3.7e-8; tet ball in a
+/// box p = 3 6e-6 / 2.4e-8 / 1e-11; boundary errors equal throughout.
+pub const ALG2_BAND: f64 = 8.0;
+
+/// The nodes within reach of `seeds`: breadth first through the cells,
+/// each reached node carrying the seed it was reached from and kept while
+/// its straight distance to that seed is within `radius(seed)`.
+fn within_reach<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[f64; D]], seeds: &[usize], radius: impl Fn(usize) -> f64) -> Vec<bool> {
+    let n = nodes.len();
+    // node → cells
+    let mut first = vec![0usize; n + 1];
+    for c in cells {
+        for &v in c {
+            first[v + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        first[i + 1] += first[i];
+    }
+    let mut fill = first.clone();
+    let mut of = vec![0usize; first[n]];
+    for (k, c) in cells.iter().enumerate() {
+        for &v in c {
+            of[fill[v]] = k;
+            fill[v] += 1;
+        }
+    }
+    let mut seed = vec![usize::MAX; n];
+    let mut queue: std::collections::VecDeque<usize> = seeds.iter().copied().collect();
+    for &i in seeds {
+        seed[i] = i;
+    }
+    while let Some(i) = queue.pop_front() {
+        let (from, reach) = (nodes[seed[i]], radius(seed[i]));
+        for &c in &of[first[i]..first[i + 1]] {
+            for &v in &cells[c] {
+                if seed[v] == usize::MAX && dist2(nodes[v], from).sqrt() <= reach {
+                    seed[v] = seed[i];
+                    queue.push_back(v);
+                }
+            }
+        }
+    }
+    seed.into_iter().map(|s| s != usize::MAX).collect()
+}
+
 /// 5-point Gauss–Legendre rule on [0, 1]: (point, weight).
 const GL5: [(f64, f64); 5] = [
     (0.046_910_077_030_668_0, 0.118_463_442_528_094_5),
@@ -760,6 +815,8 @@ pub struct RefineMesh<M, const D: usize> {
     /// Settling: per node, where a new node of a curved carrier goes
     /// (see [`RefineMesh::settling`]).
     settle: Option<Vec<Settle>>,
+    /// Per node, whether it may move ([`RefineMesh::band`]); None: all.
+    band: Option<Vec<bool>>,
 }
 
 impl<M: Clone, const D: usize> Subdivision<M, D> {
@@ -773,6 +830,7 @@ impl<M: Clone, const D: usize> Subdivision<M, D> {
             places: self.places.clone(),
             on_facets: self.on_facets.clone(),
             settle: None,
+            band: None,
         }
     }
 }
@@ -852,47 +910,17 @@ impl<const D: usize> RefineBoundary<D> {
     /// at p = 3: the whole-mesh settling doubled Algorithm 2's time).
     fn hold_beyond_band<const N: usize>(&mut self, cells: &[[usize; N]]) {
         let offset = |i: usize| self.targets[i].map_or(0.0, |(to, _)| dist2(to, self.start[i]).sqrt());
-        let n = self.roles.len();
-        let radius = SETTLE_BAND * (0..n).map(offset).fold(0.0, f64::max);
-        // node → cells
-        let mut first = vec![0usize; n + 1];
-        for c in cells {
-            for &v in c {
-                first[v + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            first[i + 1] += first[i];
-        }
-        let mut fill = first.clone();
-        let mut of = vec![0usize; first[n]];
-        for (k, c) in cells.iter().enumerate() {
-            for &v in c {
-                of[fill[v]] = k;
-                fill[v] += 1;
-            }
-        }
-        // breadth first from the moving nodes, each reached node carrying
-        // the seed it was reached from
-        let mut seed = vec![usize::MAX; n];
-        let mut queue: std::collections::VecDeque<usize> = (0..n).filter(|&i| offset(i) > 0.0).collect();
-        for &i in &queue {
-            seed[i] = i;
-        }
-        while let Some(i) = queue.pop_front() {
-            let from = self.start[seed[i]];
-            for &c in &of[first[i]..first[i + 1]] {
-                for &v in &cells[c] {
-                    if seed[v] == usize::MAX && dist2(self.start[v], from).sqrt() <= radius {
-                        seed[v] = seed[i];
-                        queue.push_back(v);
-                    }
-                }
-            }
-        }
-        for i in 0..n {
-            if seed[i] == usize::MAX && matches!(self.roles[i], Role2::Interior | Role2::Slide { .. }) {
-                self.roles[i] = Role2::Fixed;
+        let radius = SETTLE_BAND * (0..self.roles.len()).map(offset).fold(0.0, f64::max);
+        let seeds: Vec<usize> = (0..self.roles.len()).filter(|&i| offset(i) > 0.0).collect();
+        let band = within_reach(cells, &self.start, &seeds, |_| radius);
+        self.hold_outside(&band);
+    }
+
+    /// Holds the free nodes outside `band` where they are.
+    fn hold_outside(&mut self, band: &[bool]) {
+        for (role, &inside) in self.roles.iter_mut().zip(band) {
+            if !inside && matches!(role, Role2::Interior | Role2::Slide { .. }) {
+                *role = Role2::Fixed;
             }
         }
     }
@@ -1151,6 +1179,59 @@ fn off_plane<const D: usize>(c: &[[f64; D]], n: [f64; 3]) -> f64 {
 }
 
 impl<M, const D: usize> RefineMesh<M, D> {
+    /// Algorithm 2's band: per fine node, whether it lies within `width`
+    /// bend lengths of a new node of a moving part of `parts`, reached
+    /// through the cells. A facet's bend length is the length of its side
+    /// with the largest sagitta (the distance of the side's midpoint to its
+    /// image); an edge's, the largest of its facets'. Why that length: the
+    /// motion is the facets' bulge, which fades over the length along which
+    /// the facet bends — not over its height (a thin layer has many cells
+    /// within one bend length of the wall), nor its straight sides (an
+    /// extruded wall's facets are long along the axis and bend across it).
+    pub fn band<const N: usize>(&self, parts: &[BoundaryPart<D>], width: f64) -> Vec<bool>
+    where
+        M: Q1Mesh<D, N>,
+    {
+        let bend: Vec<Option<f64>> = (0..self.facet_corners.len()).map(|f| self.bend_length(f, parts)).collect();
+        let reach = |facets: &[usize]| facets.iter().filter_map(|&f| bend[f]).reduce(f64::max);
+        let reach: Vec<Option<f64>> = self
+            .places
+            .iter()
+            .map(|place| match place {
+                Place::Facet { facet, .. } => reach(std::slice::from_ref(facet)),
+                Place::Edge { edge, .. } => reach(&self.edges[*edge].1),
+                _ => None,
+            })
+            .collect();
+        let seeds: Vec<usize> = (0..reach.len()).filter(|&i| reach[i].is_some()).collect();
+        within_reach(self.mesh.cells(), self.mesh.nodes(), &seeds, |i| width * reach[i].unwrap_or(0.0))
+    }
+
+    /// The bend length of coarse facet `f` ([`RefineMesh::band`]); None
+    /// if its part does not move.
+    fn bend_length(&self, f: usize, parts: &[BoundaryPart<D>]) -> Option<f64> {
+        let part = &parts[self.facet_parts[f]];
+        if !matches!(part.kind, PartKind::Move { .. }) {
+            return None;
+        }
+        let c = &self.facet_corners[f];
+        let sides = if c.len() == 2 { 1 } else { c.len() };
+        let side = |k: usize| {
+            let (a, b) = (c[k], c[(k + 1) % c.len()]);
+            let mid: [f64; D] = std::array::from_fn(|i| 0.5 * (a[i] + b[i]));
+            let sagitta = part.image(mid).map_or(0.0, |x| dist2(x, mid).sqrt());
+            (sagitta, dist2(a, b).sqrt())
+        };
+        Some((0..sides).map(side).fold((-1.0, 0.0), |best, s| if s.0 > best.0 { s } else { best }).1)
+    }
+
+    /// Holds the nodes outside `band` ([`RefineMesh::band`]) where they
+    /// are for the runs of Algorithm 2 on this mesh.
+    pub fn with_band(mut self, band: Vec<bool>) -> Self {
+        self.band = Some(band);
+        self
+    }
+
     /// The settling pass after a sliding run: the mesh starts at `nodes`
     /// (where sliding left it) and every new node of a curved carrier
     /// follows a straight path from there to its place, with Dirichlet
@@ -1282,6 +1363,8 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
         if let Some(plan) = &self.settle {
             b.settle_roles(plan)?;
             b.hold_beyond_band(self.mesh.cells());
+        } else if let Some(band) = &self.band {
+            b.hold_outside(band);
         }
         // every sliding node of a moving carrier needs an image
         for (i, role) in b.roles.iter().enumerate() {

@@ -11,7 +11,7 @@
 use super::{check_order, Basis1d, HighOrderError, Spacing};
 use crate::mesh::element::Shape;
 use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
-use crate::refine::{refine_parts, subdivide, subdivide_mixed, RefineMesh, Settle, Subdividable, Subdivision};
+use crate::refine::{refine_parts, subdivide, subdivide_mixed, RefineMesh, Settle, Subdividable, Subdivision, ALG2_BAND};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
 use crate::mesh::{CurvedBoundary, CurvedMesh, MixedPlaneMesh};
 use crate::jacobian::JacobianField;
@@ -51,6 +51,11 @@ pub struct CurveOptions {
     /// (the shape must match the mesh) and on the result (no node pinned
     /// off the shape). See [`DEFAULT_SHAPE_TOLERANCE`].
     pub shape_tolerance: f64,
+    /// Algorithm 2 solves only within this many facet sizes of the new
+    /// nodes of the curved parts, the nodes beyond held
+    /// ([`RefineMesh::band`], [`ALG2_BAND`]); widened where an element not
+    /// certified valid has a held node. None: on the whole mesh.
+    pub band: Option<f64>,
 }
 
 /// The default of [`CurveOptions::shape_tolerance`]: 1e-3 of the local
@@ -82,7 +87,7 @@ pub const AUTO_STEPS: [usize; 4] = [1, 2, 4, 8];
 
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE, band: Some(ALG2_BAND) }
     }
 }
 
@@ -255,6 +260,23 @@ pub struct CurvedQuality {
     pub settling: Settling,
     /// The boundary data of the run of Algorithm 2 whose mesh this is.
     pub boundary_data: BoundaryData,
+    /// Where Algorithm 2 solved.
+    pub band: Band,
+}
+
+/// Where Algorithm 2 solved ([`CurveOptions::band`]).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Band {
+    /// The band's width in facet sizes in the run kept; None: the whole
+    /// mesh.
+    pub width: Option<f64>,
+    /// Fine nodes free to move in it (every fine node without a band).
+    pub nodes: usize,
+    /// All fine nodes.
+    pub all_nodes: usize,
+    /// Times the band was doubled because an element not certified valid
+    /// had a node it held.
+    pub widened: usize,
 }
 
 /// Which boundary data carried the new boundary nodes in the run of
@@ -529,6 +551,7 @@ fn summary<const D: usize>(mesh: &CurvedMesh<D>, certs: &[Certificate]) -> Curve
         boundary_error: Default::default(),
         settling: Settling::default(),
         boundary_data: BoundaryData::default(),
+        band: Band::default(),
     }
 }
 
@@ -635,10 +658,11 @@ where
     let mut certify_s = 0.0;
     let mut sliding_left = None;
     let watch = Watch::new(sub, &parts2, opts.spacing)?;
-    let unknowns = D * sub.fine.nodes().len();
+    let band = BandMask::new(sub, &parts2, opts.band);
+    let unknowns = D * band.nodes();
     let factor = starts_with_factor::<D>(&opts.flow, aspect, unknowns);
-    tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns: auto starts with the factor: {factor}");
-    let mut runner = Runner { sub, names, spacing: opts.spacing, factor, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
+    tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns in the band: auto starts with the factor: {factor}");
+    let mut runner = Runner { sub, names, spacing: opts.spacing, factor, band, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
     let mut attempts = 0;
     let slid = loop {
         let (flow, dirichlet) = schedule[attempts].clone();
@@ -658,6 +682,13 @@ where
                 continue;
             }
         };
+        // an element the band held a node of may be invalid for want of
+        // room: the same run again in a band twice as wide
+        if runner.band.widen_for(&pass.quality.invalid_elements, &sub.elements, &parts2) {
+            tracing::info!("{} elements not certified valid with a node held by the band: again in a band of {:?} facet sizes", pass.quality.invalid_elements.len(), runner.band.width);
+            attempts -= 1;
+            continue;
+        }
         // the Q1 cells stay valid with few steps, but the error of a long
         // Euler step can still bend an element of a thin layer invalid
         // (measured: a 1e-5 layer at p = 3 in one step): then again with
@@ -694,6 +725,7 @@ where
         None => settle(&sub, &parts2, opts, slid, &mut runner.certify_s),
     };
     let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = pass;
+    quality.band = runner.band.report();
     certify_s += runner.certify_s;
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
@@ -746,6 +778,78 @@ fn largest_aspect<const D: usize, C: AsRef<[usize]> + Sync>(nodes: &[[f64; D]], 
         .reduce(|| 0.0, f64::max)
 }
 
+/// The band Algorithm 2 solves in ([`CurveOptions::band`]), widened on
+/// demand.
+struct BandMask<'a, M, const D: usize> {
+    sub: &'a Subdivision<M, D>,
+    /// Width in facet sizes; None: the whole mesh.
+    width: Option<f64>,
+    /// Per fine node, whether it may move (None: all).
+    mask: Option<Vec<bool>>,
+    /// All fine nodes.
+    all: usize,
+    widened: usize,
+}
+
+impl<'a, M: Clone, const D: usize> BandMask<'a, M, D> {
+    fn new<const N: usize>(sub: &'a Subdivision<M, D>, parts: &[BoundaryPart<D>], width: Option<f64>) -> Self
+    where
+        M: Subdividable<D, N>,
+        RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+    {
+        let mut band = BandMask { sub, width, mask: None, all: sub.fine.nodes().len(), widened: 0 };
+        band.fill(parts);
+        band
+    }
+
+    /// The mask for the width; none once it holds no node.
+    fn fill<const N: usize>(&mut self, parts: &[BoundaryPart<D>])
+    where
+        M: Subdividable<D, N>,
+        RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+    {
+        self.mask = self.width.map(|w| self.sub.refine_mesh().band(parts, w)).filter(|m| m.iter().any(|&inside| !inside));
+        if self.mask.is_none() {
+            self.width = None;
+        }
+    }
+
+    /// Fine nodes free to move.
+    fn nodes(&self) -> usize {
+        self.mask.as_ref().map_or(self.all, |m| m.iter().filter(|&&inside| inside).count())
+    }
+
+    /// The fine mesh for a run of Algorithm 2 in the band.
+    fn mesh(&self) -> RefineMesh<M, D> {
+        let mesh = self.sub.refine_mesh();
+        match &self.mask {
+            Some(m) => mesh.with_band(m.clone()),
+            None => mesh,
+        }
+    }
+
+    /// Doubles the band if one of the `invalid` elements has a node it
+    /// held; whether it did.
+    fn widen_for<const N: usize>(&mut self, invalid: &[usize], elements: &[Vec<usize>], parts: &[BoundaryPart<D>]) -> bool
+    where
+        M: Subdividable<D, N>,
+        RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+    {
+        let Some(mask) = &self.mask else { return false };
+        if !invalid.iter().any(|&e| elements[e].iter().any(|&n| !mask[n])) {
+            return false;
+        }
+        self.width = self.width.map(|w| 2.0 * w);
+        self.widened += 1;
+        self.fill(parts);
+        true
+    }
+
+    fn report(&self) -> Band {
+        Band { width: self.width, nodes: self.nodes(), all_nodes: self.all, widened: self.widened }
+    }
+}
+
 /// What every run of Algorithm 2 in one `curve` shares.
 struct Runner<'a, M, const D: usize> {
     sub: &'a Subdivision<M, D>,
@@ -754,6 +858,8 @@ struct Runner<'a, M, const D: usize> {
     /// `auto`'s multigrid has turned to the factor on this mesh: the
     /// later runs start with the factor.
     factor: bool,
+    /// Where Algorithm 2 solves.
+    band: BandMask<'a, M, D>,
     /// Seconds spent certifying.
     certify_s: f64,
     /// The last watched run's [`SlidingLeft::first_row_drift`].
@@ -777,10 +883,12 @@ impl<M, const D: usize> Runner<'_, M, D> {
         RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
     {
         let mut flow = flow.clone();
+        // the solver for the band's unknowns, not the whole mesh's
+        flow.solver = flow.solver.resolved(D, D * self.band.nodes(), flow.factor_limit);
         if self.factor {
             flow.solver = SolverChoice::CholeskyCg;
         }
-        let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(self.sub.refine_mesh(), parts.to_vec(), JacobianField::uniform(), flow)?;
+        let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(self.band.mesh(), parts.to_vec(), JacobianField::uniform(), flow)?;
         let (mut inverted, mut drift) = (0, 0.0);
         def.run_while(|d| {
             progress(d.t, &d.stats);

@@ -8,6 +8,7 @@ mod common;
 
 mod abaqus;
 mod adaptation;
+mod band;
 mod cli;
 mod curve_import;
 mod deformation;
