@@ -449,7 +449,12 @@ impl SimplexCertifier {
         let neg: Coef = parts.det.iter().map(|c| -c).collect();
         let (neg_lo, _, s2) = self.bound_min(&neg, err, goal);
         let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
-        let (min_det, min_sj) = self.sample(&parts.col, m);
+        let (min_det, min_sj) = match constant_jacobian(&parts.col, parts.deriv_max) {
+            // a straight-sided element (most of a mesh curved at its walls):
+            // its J, hence both figures, is the same at every sample
+            Some(j) => (det(&j), scaled_jacobian(&j)),
+            None => self.sample(&parts.col, m),
+        };
         // s is a power of two: scaling back is exact (unless the true
         // value under- or overflows)
         let unit = |x: f64| (0..D).fold(x, |v, _| v * s);
@@ -485,6 +490,15 @@ impl SimplexCertifier {
         }
         (min_det, min_sj)
     }
+}
+
+/// J of an affine element: when every entry's Bernstein coefficients
+/// agree to rounding (relative to the largest, `deriv_max`), J is that
+/// constant (a vertex value: the first coefficient).
+fn constant_jacobian<const D: usize>(col: &[[Coef; D]; D], deriv_max: f64) -> Option<[[f64; D]; D]> {
+    let tol = 64.0 * f64::EPSILON * deriv_max;
+    let flat = col.iter().flatten().all(|c| c.iter().all(|&v| (v - c[0]).abs() <= tol));
+    flat.then(|| std::array::from_fn(|r| std::array::from_fn(|c| col[c][r][0])))
 }
 
 /// The points of the lattice of `m ≥ 2` points per edge of the simplex.

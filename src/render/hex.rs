@@ -34,6 +34,7 @@ mod tests;
 pub(crate) mod view;
 
 use tiny_skia::Pixmap;
+use rayon::prelude::*;
 
 use super::{bounding_box, pieces, validate, ColourMap, Frame, RenderError, Style};
 use crate::mesh::element::Shape;
@@ -309,48 +310,59 @@ fn kept_cells(mesh: &CurvedMesh<3>, corners: &Corners, clip: Option<&ClipPlane>)
 struct Projected<'a> {
     patch: &'a Patch,
     px: Vec<[f64; 3]>,
+    /// The smallest and largest y of `px`.
+    rows: (f64, f64),
     border: Vec<[[f64; 3]; 2]>,
     base: [u8; 3],
 }
 
 /// Rasterises the surface into a supersampled z-buffer over the plot
-/// region and copies the averaged result into `pixmap`.
+/// region and copies the averaged result into `pixmap`. Bands of rows are
+/// drawn side by side (each sample sees the same triangles in the same
+/// order as in one pass: the same picture).
 fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges: bool) {
     let region = plan.frame.layout.plot_region();
     let ss = SUPERSAMPLE as f64;
-    let mut canvas = Canvas::new(region[2] * SUPERSAMPLE, region[3] * SUPERSAMPLE);
+    let (width, height) = ((region[2] * SUPERSAMPLE) as usize, (region[3] * SUPERSAMPLE) as usize);
     let edges = if draw_edges { edge_style(plan) } else { None };
     // The same for every face: computed once.
     let (pieces, border) = (plan.grid.pieces(), plan.grid.border());
     let per_piece = plan.grid.piece_corners();
-    for patch in &plan.patches {
-        // A face with a point behind the eye is skipped rather than
-        // clipped: only possible when a given box cuts through the mesh.
-        let Some(px) = patch
-            .points
-            .iter()
-            .map(|&p| {
-                let [x, y, depth] = plan.to_image(p)?;
-                Some([
-                    (x - region[0] as f64) * ss,
-                    (y - region[1] as f64) * ss,
-                    depth,
-                ])
-            })
-            .collect::<Option<Vec<[f64; 3]>>>()
-        else {
-            continue;
-        };
-        let face = Projected {
-            patch,
-            border: border.iter().map(|&[a, b]| [px[a], px[b]]).collect(),
-            px,
-            base: plan.frame.colour(values[patch.cell]),
-        };
-        for ids in pieces.chunks_exact(per_piece) {
-            draw_piece(&mut canvas, plan, &face, ids, edges);
-        }
-    }
+    let faces: Vec<Projected> = plan
+        .patches
+        .par_iter()
+        .filter_map(|patch| {
+            // A face with a point behind the eye is skipped rather than
+            // clipped: only possible when a given box cuts through the mesh.
+            let px = patch
+                .points
+                .iter()
+                .map(|&p| {
+                    let [x, y, depth] = plan.to_image(p)?;
+                    Some([(x - region[0] as f64) * ss, (y - region[1] as f64) * ss, depth])
+                })
+                .collect::<Option<Vec<[f64; 3]>>>()?;
+            let rows = px.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+            Some(Projected { patch, border: border.iter().map(|&[a, b]| [px[a], px[b]]).collect(), px, rows, base: plan.frame.colour(values[patch.cell]) })
+        })
+        .collect();
+    let bands = (4 * rayon::current_num_threads()).clamp(1, height.max(1));
+    let canvases: Vec<Canvas> = (0..bands)
+        .into_par_iter()
+        .map(|b| {
+            let mut canvas = Canvas::rows(width, height * b / bands..height * (b + 1) / bands);
+            for face in &faces {
+                if !canvas.meets_rows(face.rows.0, face.rows.1) {
+                    continue;
+                }
+                for ids in pieces.chunks_exact(per_piece) {
+                    draw_piece(&mut canvas, plan, face, ids, edges);
+                }
+            }
+            canvas
+        })
+        .collect();
+    let mut canvas = Canvas::stack(canvases);
     let outline = (OUTLINE_PX * plan.frame.layout.res() as f64 * ss).round() as usize;
     canvas.outline(outline.max(1), raster::INK, 0.9);
     canvas.blit(pixmap, region[0], region[1], SUPERSAMPLE);
@@ -367,8 +379,12 @@ fn draw_piece(
     edges: Option<EdgeStyle>,
 ) {
     let n = ids.len();
-    let light = piece_light(plan, face.patch, ids);
     let corners: [[f64; 3]; 4] = std::array::from_fn(|i| face.px[ids[i.min(n - 1)]]);
+    let (lo, hi) = corners[..n].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+    if !canvas.meets_rows(lo, hi) {
+        return;
+    }
+    let light = piece_light(plan, face.patch, ids);
     let near =
         edges.map(|style| nearby_segments(&face.border, &corners[..n], style.half_width + 1.0));
     for t in 1..n - 1 {

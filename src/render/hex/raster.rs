@@ -18,24 +18,46 @@ pub(crate) struct EdgeStyle {
 }
 
 /// A white RGB image with a depth per sample (infinite where nothing was
-/// drawn).
+/// drawn), or the band of its rows from `top` on ([`Canvas::rows`]).
 pub(crate) struct Canvas {
     width: usize,
     height: usize,
+    top: usize,
     rgb: Vec<[u8; 3]>,
     depth: Vec<f32>,
 }
 
 impl Canvas {
     /// A blank canvas of `width × height` samples.
+    #[cfg(test)]
     pub fn new(width: u32, height: u32) -> Canvas {
-        let n = width as usize * height as usize;
-        Canvas {
-            width: width as usize,
-            height: height as usize,
-            rgb: vec![[255; 3]; n],
-            depth: vec![f32::INFINITY; n],
+        Canvas::rows(width as usize, 0..height as usize)
+    }
+
+    /// The rows `rows` of a blank canvas `width` samples wide: triangles
+    /// are given in the whole canvas's samples and drawn where they meet
+    /// these rows, so bands drawn apart and [`Canvas::stack`]ed are the
+    /// canvas drawn whole, sample for sample.
+    pub fn rows(width: usize, rows: std::ops::Range<usize>) -> Canvas {
+        let n = width * rows.len();
+        Canvas { width, height: rows.len(), top: rows.start, rgb: vec![[255; 3]; n], depth: vec![f32::INFINITY; n] }
+    }
+
+    /// The bands (in order, from the top) as one canvas.
+    pub fn stack(bands: Vec<Canvas>) -> Canvas {
+        let width = bands.first().map_or(0, |b| b.width);
+        let (mut rgb, mut depth) = (Vec::new(), Vec::new());
+        for b in &bands {
+            rgb.extend_from_slice(&b.rgb);
+            depth.extend_from_slice(&b.depth);
         }
+        Canvas { width, height: bands.iter().map(|b| b.height).sum(), top: bands.first().map_or(0, |b| b.top), rgb, depth }
+    }
+
+    /// Whether samples with centres from `lo` to `hi` (y) may be in these
+    /// rows.
+    pub fn meets_rows(&self, lo: f64, hi: f64) -> bool {
+        hi + 0.5 >= self.top as f64 && lo - 0.5 <= (self.top + self.height) as f64
     }
 
     /// Rasterises one triangle: a sample is inside when its centre is on
@@ -65,7 +87,7 @@ impl Canvas {
                     continue;
                 }
                 let depth = (w[0] * t[0][2] + w[1] * t[1][2] + w[2] * t[2][2]) as f32;
-                let i = y * self.width + x;
+                let i = (y - self.top) * self.width + x;
                 if depth < self.depth[i] {
                     self.depth[i] = depth;
                     self.rgb[i] = paint(px, py);
@@ -80,15 +102,15 @@ impl Canvas {
         &self,
         t: &[[f64; 3]; 3],
     ) -> Option<(std::ops::Range<usize>, std::ops::Range<usize>)> {
-        let span = |k: usize, len: usize| {
+        let span = |k: usize, len: std::ops::Range<usize>| {
             let lo = t.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
             let hi = t.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
             // Sample i has its centre at i + 0.5.
-            let first = (lo - 0.5).ceil().max(0.0);
-            let last = (hi - 0.5).floor().min(len as f64 - 1.0);
+            let first = (lo - 0.5).ceil().max(len.start as f64);
+            let last = (hi - 0.5).floor().min(len.end as f64 - 1.0);
             (first <= last).then(|| first as usize..last as usize + 1)
         };
-        Some((span(0, self.width)?, span(1, self.height)?))
+        Some((span(0, 0..self.width)?, span(1, self.top..self.top + self.height)?))
     }
 
     /// Darkens covered samples within `radius` samples (horizontally and
