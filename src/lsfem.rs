@@ -575,10 +575,9 @@ impl<const D: usize, const N: usize> Scatter<'_, D, N> {
     }
 }
 
-/// Each node's neighbours (nodes sharing a cell, itself included) that
-/// have free unknowns, sorted; empty for a node without any.
-fn node_neighbours<const N: usize>(cells: &[[usize; N]], free: &[u32]) -> Vec<Vec<u32>> {
-    let nodes = free.len();
+/// The cells at each node, as a CSR pair: node i's cells are
+/// `of[ptr[i]..ptr[i + 1]]`, in increasing order.
+pub(crate) fn node_cells<const N: usize>(cells: &[[usize; N]], nodes: usize) -> (Vec<usize>, Vec<u32>) {
     let mut ptr = vec![0usize; nodes + 1];
     for cell in cells {
         for &v in cell {
@@ -596,6 +595,14 @@ fn node_neighbours<const N: usize>(cells: &[[usize; N]], free: &[u32]) -> Vec<Ve
             fill[v] += 1;
         }
     }
+    (ptr, of)
+}
+
+/// Each node's neighbours (nodes sharing a cell, itself included) that
+/// have free unknowns, sorted; empty for a node without any.
+fn node_neighbours<const N: usize>(cells: &[[usize; N]], free: &[u32]) -> Vec<Vec<u32>> {
+    let nodes = free.len();
+    let (ptr, of) = node_cells(cells, nodes);
     (0..nodes)
         .into_par_iter()
         .map(|i| {

@@ -673,24 +673,7 @@ pub const ALG2_BAND: f64 = 8.0;
 /// its straight distance to that seed is within `radius(seed)`.
 fn within_reach<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[f64; D]], seeds: &[usize], radius: impl Fn(usize) -> f64) -> Vec<bool> {
     let n = nodes.len();
-    // node → cells
-    let mut first = vec![0usize; n + 1];
-    for c in cells {
-        for &v in c {
-            first[v + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        first[i + 1] += first[i];
-    }
-    let mut fill = first.clone();
-    let mut of = vec![0usize; first[n]];
-    for (k, c) in cells.iter().enumerate() {
-        for &v in c {
-            of[fill[v]] = k;
-            fill[v] += 1;
-        }
-    }
+    let (first, of) = crate::lsfem::node_cells(cells, n);
     let mut seed = vec![usize::MAX; n];
     let mut queue: std::collections::VecDeque<usize> = seeds.iter().copied().collect();
     for &i in seeds {
@@ -699,7 +682,7 @@ fn within_reach<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[
     while let Some(i) = queue.pop_front() {
         let (from, reach) = (nodes[seed[i]], radius(seed[i]));
         for &c in &of[first[i]..first[i + 1]] {
-            for &v in &cells[c] {
+            for &v in &cells[c as usize] {
                 if seed[v] == usize::MAX && dist2(nodes[v], from).sqrt() <= reach {
                     seed[v] = seed[i];
                     queue.push_back(v);
