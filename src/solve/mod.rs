@@ -18,6 +18,7 @@ mod amg;
 mod cg;
 mod cholesky;
 mod csr;
+mod lines;
 
 pub use amg::{Amg, AmgOptions};
 pub use cg::{ConjugateGradient, Jacobi, Preconditioner, DEFAULT_TOLERANCE};
