@@ -29,7 +29,9 @@ use rayon::prelude::*;
 const MAX_NODE_BAND: usize = 2;
 
 /// A node whose third strongest coupling reaches this fraction of its
-/// strongest is isotropic and keeps the point smoother.
+/// strongest is isotropic and keeps the point smoother. Measured: 0.3
+/// left the extruded 1e-5 layer at p = 3 at 256 iterations (19 with
+/// 0.75), and the 1e-2 layer at 54 (16).
 const ISOTROPIC: f64 = 0.75;
 
 /// The block-line smoother (see the module docs).
