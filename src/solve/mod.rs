@@ -18,8 +18,9 @@ mod amg;
 mod cg;
 mod cholesky;
 mod csr;
+mod lines;
 
-pub use amg::{Amg, AmgOptions};
+pub use amg::{Amg, AmgOptions, LINE_RATIO};
 pub use cg::{ConjugateGradient, Jacobi, Preconditioner, DEFAULT_TOLERANCE};
 pub use cholesky::{CholeskySolver, LaggedCholesky};
 pub use csr::{axpy, dot, Csr};

@@ -342,3 +342,120 @@ fn cg_on_a_fresh_factor_that_hits_its_cap_solves_directly() {
     assert_eq!((t.rebuilt, t.factor, t.direct), (1, 0, 2), "{t:?}");
     assert!(!solver.info().fell_back, "the factor was the first solver");
 }
+
+/// The Q1 div-curl system ∫ (div u)² + (curl u)² on an nx × ny grid of
+/// rectangles, uniform in x over [0, 1], the rows in y growing
+/// geometrically from hx / `aspect` at the bottom (a boundary layer) to
+/// about hx; the boundary nodes are fixed (eliminated), and each node's two
+/// unknowns are its velocity in a random rotated frame, as the LSFEM's.
+/// Returns A, the node pointer and the rotated translations.
+fn layer_div_curl(nx: usize, ny: usize, aspect: f64) -> (Csr, Vec<u32>, Vec<f64>) {
+    let hx = 1.0 / (nx - 1) as f64;
+    let growth = aspect.powf(1.0 / (ny - 2) as f64);
+    let hy: Vec<f64> = (0..ny - 1).map(|j| hx / aspect * growth.powi(j as i32)).collect();
+    // the interior nodes: node (i, j) is (j − 1)(nx − 2) + i − 1
+    let nodes = (nx - 2) * (ny - 2);
+    let n = 2 * nodes;
+    let id = |i: usize, j: usize| (i >= 1 && j >= 1 && i + 1 < nx && j + 1 < ny).then(|| (j - 1) * (nx - 2) + i - 1);
+    let angle = |k: usize| ((k * 2654435761) % 1000) as f64 * 0.00628;
+    let frame = |k: usize| {
+        let (s, c) = angle(k).sin_cos();
+        [[c, s], [-s, c]]
+    };
+    let mut pairs = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let corners: Vec<usize> = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].iter().filter_map(|&(a, b)| id(a, b)).collect();
+            for &p in &corners {
+                for &q in &corners {
+                    if p <= q {
+                        for k in 0..4 {
+                            let (r, c) = (2 * q + k / 2, 2 * p + k % 2);
+                            if r > c {
+                                pairs.push((r, c));
+                            } else if c > r {
+                                pairs.push((c, r));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut a = Csr::symmetric_from_pairs(n, pairs);
+    a.val.iter_mut().for_each(|v| *v = 0.0);
+    // 2×2 Gauss points, bilinear shape functions on [0, a] × [0, b]
+    let g = [0.5 - 0.5 / 3f64.sqrt(), 0.5 + 0.5 / 3f64.sqrt()];
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let (w, h) = (hx, hy[j]);
+            let local = [(0, 0), (1, 0), (0, 1), (1, 1)];
+            for &(xi, eta) in &[(g[0], g[0]), (g[1], g[0]), (g[0], g[1]), (g[1], g[1])] {
+                let grad = |(a, b): (usize, usize)| {
+                    let (fx, fy) = (if a == 1 { xi } else { 1.0 - xi }, if b == 1 { eta } else { 1.0 - eta });
+                    let (sx, sy) = (if a == 1 { 1.0 } else { -1.0 }, if b == 1 { 1.0 } else { -1.0 });
+                    [sx * fy / w, sy * fx / h]
+                };
+                let weight = 0.25 * w * h;
+                for &pa in &local {
+                    for &pb in &local {
+                        let (Some(p), Some(q)) = (id(i + pa.0, j + pa.1), id(i + pb.0, j + pb.1)) else { continue };
+                        let (ga, gb) = (grad(pa), grad(pb));
+                        // Cartesian block: div-curl K = tr(M) I + M − Mᵀ
+                        let m = |k: usize, l: usize| ga[k] * gb[l];
+                        let tr = m(0, 0) + m(1, 1);
+                        let cart = [[tr, m(0, 1) - m(1, 0)], [m(1, 0) - m(0, 1), tr]];
+                        let (fp, fq) = (frame(p), frame(q));
+                        for k in 0..2 {
+                            for l in 0..2 {
+                                let v: f64 = (0..2).flat_map(|d| (0..2).map(move |e| (d, e))).map(|(d, e)| fp[k][d] * cart[d][e] * fq[l][e]).sum();
+                                let at = a.position(2 * p + k, 2 * q + l).unwrap();
+                                a.val[at] += weight * v;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let ptr: Vec<u32> = (0..=nodes as u32).map(|k| 2 * k).collect();
+    let mut rotated = vec![0.0; 2 * n];
+    for p in 0..nodes {
+        for k in 0..2 {
+            for d in 0..2 {
+                rotated[d * n + 2 * p + k] = frame(p)[k][d];
+            }
+        }
+    }
+    (a, ptr, rotated)
+}
+
+#[test]
+fn line_smoothing_keeps_iterations_flat_on_thin_layers() {
+    // the test in miniature: first-row aspect ratios 1 … 1e5
+    let run = |aspect: f64, lines: Option<f64>| {
+        let (a, ptr, null) = layer_div_curl(100, 40, aspect);
+        let n = a.nrows;
+        let b: Vec<f64> = (0..n).map(|i| ((i * 11) % 7) as f64 - 3.0).collect();
+        // a small coarsest level, so that lines smooth several levels
+        let options = AmgOptions { lines, coarse_size: 100, ..AmgOptions::default() };
+        let mut cg = ConjugateGradient::new(Amg::new(options));
+        cg.max_iterations = 2000;
+        let x = solve_with(&mut cg, &a, &b, Structure { node_ptr: &ptr, near_null: &null, count: 2 });
+        let mut r = vec![0.0; n];
+        a.residual(&b, &x, &mut r);
+        assert!(dot(&r, &r).sqrt() <= DEFAULT_TOLERANCE * dot(&b, &b).sqrt());
+        (cg.last_iterations(), x)
+    };
+    let aspects = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5];
+    let with: Vec<usize> = aspects.iter().map(|&s| run(s, Some(LINE_RATIO)).0).collect();
+    let without: Vec<usize> = aspects.iter().map(|&s| run(s, None).0).collect();
+    // measured: lines 16, 9, 13, 10, 10, 10; the point smoother 16, 30,
+    // 49, 64, 64, 61
+    let (lo, hi) = (*with.iter().min().unwrap(), *with.iter().max().unwrap());
+    assert!(hi <= 20 && hi <= 2 * lo, "lines {with:?}, point smoother {without:?}");
+    assert!((3..6).all(|k| without[k] > 4 * with[k]), "lines {with:?}, point smoother {without:?}");
+    // deterministic: the same bits again
+    let (x1, x2) = (run(1e5, Some(LINE_RATIO)).1, run(1e5, Some(LINE_RATIO)).1);
+    assert!(x1.iter().zip(&x2).all(|(p, q)| p.to_bits() == q.to_bits()));
+}
