@@ -43,8 +43,10 @@ fn agrees(name: &str, dir: &Path, (input, geometry): (PathBuf, &str), order: usi
 fn the_band_solve_agrees_with_the_whole_mesh_solve() {
     let dir = tempfile::tempdir().unwrap();
     let default = CurveOptions::default().band.unwrap();
-    // measured: rel 3.8e-11 (ball octant), 2.1e-8 (cylinder layer)
-    agrees("ball octant p = 3", dir.path(), (data("ball_octant_hex.msh"), BALL_OCTANT), 3, Some(1), default, 1e-9);
+    // measured: rel 3.8e-11 and 1.4e-9 (ball octant, two multigrids: both
+    // runs are CG solves to a relative residual of 1e-7, which bounds how
+    // far they can agree), 1.2e-9 – 2.1e-8 (cylinder layer)
+    agrees("ball octant p = 3", dir.path(), (data("ball_octant_hex.msh"), BALL_OCTANT), 3, Some(1), default, 1e-7);
     agrees("cylinder 1e-3 layer p = 3", dir.path(), (data("cylinder_bl_coarse.msh"), WALL_CIRCLE), 3, None, default, 1e-6);
     // (the 1e-4 sphere layer of curve_import.rs is left out: the default
     // band covers its whole box, and at half the width its run took
