@@ -167,14 +167,7 @@ fn near_null_space_of_rotated_frames_keeps_iterations_low() {
         }
     }
     let ptr: Vec<u32> = (0..=nodes as u32).map(|k| 2 * k).collect();
-    let mut rotated = vec![0.0; 2 * n];
-    for p in 0..nodes {
-        for k in 0..2 {
-            for d in 0..2 {
-                rotated[d * n + 2 * p + k] = frame(p)[k][d];
-            }
-        }
-    }
+    let rotated = rotated_translations(nodes, &frame);
     let constants: Vec<f64> = (0..2 * n).map(|i| if (i % n) % 2 == i / n { 1.0 } else { 0.0 }).collect();
     let b: Vec<f64> = (0..n).map(|i| ((i * 11) % 7) as f64 - 3.0).collect();
     let mut iterations = Vec::new();
@@ -419,14 +412,7 @@ fn layer_div_curl(nx: usize, ny: usize, aspect: f64) -> (Csr, Vec<u32>, Vec<f64>
         }
     }
     let ptr: Vec<u32> = (0..=nodes as u32).map(|k| 2 * k).collect();
-    let mut rotated = vec![0.0; 2 * n];
-    for p in 0..nodes {
-        for k in 0..2 {
-            for d in 0..2 {
-                rotated[d * n + 2 * p + k] = frame(p)[k][d];
-            }
-        }
-    }
+    let rotated = rotated_translations(nodes, &frame);
     (a, ptr, rotated)
 }
 
@@ -458,4 +444,19 @@ fn line_smoothing_keeps_iterations_flat_on_thin_layers() {
     // deterministic: the same bits again
     let (x1, x2) = (run(1e5, Some(LINE_RATIO)).1, run(1e5, Some(LINE_RATIO)).1);
     assert!(x1.iter().zip(&x2).all(|(p, q)| p.to_bits() == q.to_bits()));
+}
+
+/// The near-null space of a 2D system whose node p has its unknowns in
+/// the frame `frame(p)`: the two translations in each node's frame.
+fn rotated_translations(nodes: usize, frame: &impl Fn(usize) -> [[f64; 2]; 2]) -> Vec<f64> {
+    let n = 2 * nodes;
+    let mut rotated = vec![0.0; 2 * n];
+    for p in 0..nodes {
+        for k in 0..2 {
+            for d in 0..2 {
+                rotated[d * n + 2 * p + k] = frame(p)[k][d];
+            }
+        }
+    }
+    rotated
 }
