@@ -1,7 +1,7 @@
 //! Algorithm 2 solved only in a band along the curved walls (issue 22):
 //! the same certified figures as the solve on the whole mesh.
 
-use crate::common::{data, BALL_OCTANT, WALL_CIRCLE};
+use crate::common::{self, data, BALL_OCTANT, WALL_CIRCLE};
 use deformesh::app::driver::{curve_file, CurveJob, CurveReport};
 use deformesh::highorder::curve::CurveOptions;
 use std::path::{Path, PathBuf};
@@ -52,4 +52,34 @@ fn the_band_solve_agrees_with_the_whole_mesh_solve() {
     // band covers its whole box, and at half the width its run took
     // another path, Dirichlet data after sliding, as a whole-mesh run on a
     // busy machine once did too)
+}
+
+#[test]
+fn the_multigrid_keeps_its_iterations_on_thin_layers() {
+    // the extruded cylinder family of the thin-layer issue, first layers
+    // 1e-1 … 1e-5, through the multigrid alone: with line relaxation the
+    // iterations per solve stay under 30 and within 2× of each other at
+    // p = 2 and 3 (before it: 10 → 645 at p = 2, 13 → 863 at p = 3)
+    let dir = tempfile::tempdir().unwrap();
+    let geometry = include_str!("../data/extruded_cylinder.geometry.toml");
+    for p in [2, 3] {
+        let mut means = Vec::new();
+        for first in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5] {
+            let input = dir.path().join(format!("extruded_{first}.msh"));
+            common::run_script("cylinder_bl.py", &[first.to_string(), "0.3".into(), input.display().to_string(), "--far".into(), "0.8".into(), "--extrude".into()]);
+            let g = dir.path().join("geometry.toml");
+            std::fs::write(&g, geometry).unwrap();
+            let flow = deformesh::deform::DeformOptions { solver: deformesh::deform::SolverChoice::Amg, ..Default::default() };
+            let options = CurveOptions { order: p, flow, ..Default::default() };
+            let job = CurveJob { input, geometry: g, output: dir.path().join(format!("p{p}_{first}.msh")), format: deformesh::app::driver::OutputFormat::Msh41, options, width: 300 };
+            let r = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("first layer {first} at p = {p}: {e}"));
+            let s = &r.solver;
+            assert!(r.quality.invalid_elements.is_empty() && s.solver.contains("AMG") && !s.solver.contains("Cholesky"), "first layer {first} at p = {p}: {}", s.solver);
+            assert!(s.iterations_max < 30, "first layer {first} at p = {p}: {s:?}");
+            eprintln!("first layer {first:e}, p = {p}: {} unknowns, CG iterations mean {:.1}, max {}, set-up {:.2} s, total {:.2} s", s.unknowns, s.iterations_mean, s.iterations_max, s.setup_s, r.total_s);
+            means.push(s.iterations_mean);
+        }
+        let (lo, hi) = means.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &m| (lo.min(m), hi.max(m)));
+        assert!(hi <= 2.0 * lo, "p = {p}: iterations per solve {means:?}");
+    }
 }
