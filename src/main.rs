@@ -78,9 +78,10 @@ enum Command {
         /// `shape_tolerance` may raise it).
         #[arg(long, default_value_t = deformesh::highorder::curve::DEFAULT_SHAPE_TOLERANCE)]
         shape_tolerance: f64,
-        /// Algorithm 2 solves within this many facet sizes of the curved
-        /// walls, the nodes beyond held (doubled where an element is left
-        /// invalid with a held node); `all`: on the whole mesh.
+        /// Algorithm 2 solves within this many bend lengths (a facet's
+        /// length along the wall) of the curved walls, the nodes beyond
+        /// held (doubled where an element is left invalid with a held
+        /// node); `all`: on the whole mesh.
         #[arg(long, default_value_t = deformesh::refine::ALG2_BAND.to_string())]
         band: String,
         /// The curved mesh to write: its extension chooses the format

@@ -657,7 +657,7 @@ pub const SETTLE_BAND: f64 = 30.0;
 
 /// Algorithm 2 solves only within this many bend lengths (about a facet's
 /// size along the wall) of the new nodes of the moving parts
-/// ([`RefineMesh::band`]); the nodes beyond are held.
+/// ([`Subdivision::band`]); the nodes beyond are held.
 /// Why: the motion is the bulge of the curved facets, and it fades away
 /// from the wall: by 3–4× per cell on the ball octant at p = 3
 /// (`../shared/notes`), by about 1.6× per bend length on the extruded
@@ -798,8 +798,56 @@ pub struct RefineMesh<M, const D: usize> {
     /// Settling: per node, where a new node of a curved carrier goes
     /// (see [`RefineMesh::settling`]).
     settle: Option<Vec<Settle>>,
-    /// Per node, whether it may move ([`RefineMesh::band`]); None: all.
+    /// Per node, whether it may move ([`Subdivision::band`]); None: all.
     band: Option<Vec<bool>>,
+}
+
+impl<M, const D: usize> Subdivision<M, D> {
+    /// Algorithm 2's band: per fine node, whether it lies within `width`
+    /// bend lengths of a new node of a moving part of `parts`, reached
+    /// through the cells. A facet's bend length is the length of its side
+    /// with the largest sagitta (the distance of the side's midpoint to its
+    /// image); an edge's, the largest of its facets'. Why that length: the
+    /// motion is the facets' bulge, which fades over the length along which
+    /// the facet bends — not over its height (a thin layer has many cells
+    /// within one bend length of the wall), nor its straight sides (an
+    /// extruded wall's facets are long along the axis and bend across it).
+    pub fn band<const N: usize>(&self, parts: &[BoundaryPart<D>], width: f64) -> Vec<bool>
+    where
+        M: Subdividable<D, N>,
+    {
+        let bend: Vec<Option<f64>> = (0..self.facet_corners.len()).map(|f| self.bend_length(f, parts)).collect();
+        let reach = |facets: &[usize]| facets.iter().filter_map(|&f| bend[f]).reduce(f64::max);
+        let reach: Vec<Option<f64>> = self
+            .places
+            .iter()
+            .map(|place| match place {
+                Place::Facet { facet, .. } => reach(std::slice::from_ref(facet)),
+                Place::Edge { edge, .. } => reach(&self.edges[*edge].1),
+                _ => None,
+            })
+            .collect();
+        let seeds: Vec<usize> = (0..reach.len()).filter(|&i| reach[i].is_some()).collect();
+        within_reach(self.fine.cells(), self.fine.nodes(), &seeds, |i| width * reach[i].unwrap_or(0.0))
+    }
+
+    /// The bend length of coarse facet `f` ([`Subdivision::band`]); None
+    /// if its part does not move.
+    fn bend_length(&self, f: usize, parts: &[BoundaryPart<D>]) -> Option<f64> {
+        let part = &parts[self.facets[f].1];
+        if !matches!(part.kind, PartKind::Move { .. }) {
+            return None;
+        }
+        let c = &self.facet_corners[f];
+        let sides = if c.len() == 2 { 1 } else { c.len() };
+        let side = |k: usize| {
+            let (a, b) = (c[k], c[(k + 1) % c.len()]);
+            let mid: [f64; D] = std::array::from_fn(|i| 0.5 * (a[i] + b[i]));
+            let sagitta = part.image(mid).map_or(0.0, |x| dist2(x, mid).sqrt());
+            (sagitta, dist2(a, b).sqrt())
+        };
+        Some((0..sides).map(side).fold((-1.0, 0.0), |best, s| if s.0 > best.0 { s } else { best }).1)
+    }
 }
 
 impl<M: Clone, const D: usize> Subdivision<M, D> {
@@ -1162,53 +1210,7 @@ fn off_plane<const D: usize>(c: &[[f64; D]], n: [f64; 3]) -> f64 {
 }
 
 impl<M, const D: usize> RefineMesh<M, D> {
-    /// Algorithm 2's band: per fine node, whether it lies within `width`
-    /// bend lengths of a new node of a moving part of `parts`, reached
-    /// through the cells. A facet's bend length is the length of its side
-    /// with the largest sagitta (the distance of the side's midpoint to its
-    /// image); an edge's, the largest of its facets'. Why that length: the
-    /// motion is the facets' bulge, which fades over the length along which
-    /// the facet bends — not over its height (a thin layer has many cells
-    /// within one bend length of the wall), nor its straight sides (an
-    /// extruded wall's facets are long along the axis and bend across it).
-    pub fn band<const N: usize>(&self, parts: &[BoundaryPart<D>], width: f64) -> Vec<bool>
-    where
-        M: Q1Mesh<D, N>,
-    {
-        let bend: Vec<Option<f64>> = (0..self.facet_corners.len()).map(|f| self.bend_length(f, parts)).collect();
-        let reach = |facets: &[usize]| facets.iter().filter_map(|&f| bend[f]).reduce(f64::max);
-        let reach: Vec<Option<f64>> = self
-            .places
-            .iter()
-            .map(|place| match place {
-                Place::Facet { facet, .. } => reach(std::slice::from_ref(facet)),
-                Place::Edge { edge, .. } => reach(&self.edges[*edge].1),
-                _ => None,
-            })
-            .collect();
-        let seeds: Vec<usize> = (0..reach.len()).filter(|&i| reach[i].is_some()).collect();
-        within_reach(self.mesh.cells(), self.mesh.nodes(), &seeds, |i| width * reach[i].unwrap_or(0.0))
-    }
-
-    /// The bend length of coarse facet `f` ([`RefineMesh::band`]); None
-    /// if its part does not move.
-    fn bend_length(&self, f: usize, parts: &[BoundaryPart<D>]) -> Option<f64> {
-        let part = &parts[self.facet_parts[f]];
-        if !matches!(part.kind, PartKind::Move { .. }) {
-            return None;
-        }
-        let c = &self.facet_corners[f];
-        let sides = if c.len() == 2 { 1 } else { c.len() };
-        let side = |k: usize| {
-            let (a, b) = (c[k], c[(k + 1) % c.len()]);
-            let mid: [f64; D] = std::array::from_fn(|i| 0.5 * (a[i] + b[i]));
-            let sagitta = part.image(mid).map_or(0.0, |x| dist2(x, mid).sqrt());
-            (sagitta, dist2(a, b).sqrt())
-        };
-        Some((0..sides).map(side).fold((-1.0, 0.0), |best, s| if s.0 > best.0 { s } else { best }).1)
-    }
-
-    /// Holds the nodes outside `band` ([`RefineMesh::band`]) where they
+    /// Holds the nodes outside `band` ([`Subdivision::band`]) where they
     /// are for the runs of Algorithm 2 on this mesh.
     pub fn with_band(mut self, band: Vec<bool>) -> Self {
         self.band = Some(band);

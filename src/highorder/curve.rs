@@ -51,9 +51,10 @@ pub struct CurveOptions {
     /// (the shape must match the mesh) and on the result (no node pinned
     /// off the shape). See [`DEFAULT_SHAPE_TOLERANCE`].
     pub shape_tolerance: f64,
-    /// Algorithm 2 solves only within this many facet sizes of the new
-    /// nodes of the curved parts, the nodes beyond held
-    /// ([`RefineMesh::band`], [`ALG2_BAND`]); widened where an element not
+    /// Algorithm 2 solves only within this many bend lengths (about a
+    /// facet's length along the wall) of the new nodes of the curved parts,
+    /// the nodes beyond held
+    /// ([`Subdivision::band`], [`ALG2_BAND`]); widened where an element not
     /// certified valid has a held node. None: on the whole mesh.
     pub band: Option<f64>,
 }
@@ -267,7 +268,7 @@ pub struct CurvedQuality {
 /// Where Algorithm 2 solved ([`CurveOptions::band`]).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Band {
-    /// The band's width in facet sizes in the run kept; None: the whole
+    /// The band's width in bend lengths in the run kept; None: the whole
     /// mesh.
     pub width: Option<f64>,
     /// Fine nodes free to move in it (every fine node without a band).
@@ -685,7 +686,7 @@ where
         // an element the band held a node of may be invalid for want of
         // room: the same run again in a band twice as wide
         if runner.band.widen_for(&pass.quality.invalid_elements, &sub.elements, &parts2) {
-            tracing::info!("{} elements not certified valid with a node held by the band: again in a band of {:?} facet sizes", pass.quality.invalid_elements.len(), runner.band.width);
+            tracing::info!("{} elements not certified valid with a node held by the band: again in a band of {:?} bend lengths", pass.quality.invalid_elements.len(), runner.band.width);
             attempts -= 1;
             continue;
         }
@@ -786,7 +787,7 @@ fn largest_aspect<const D: usize, C: AsRef<[usize]> + Sync>(nodes: &[[f64; D]], 
 /// demand.
 struct BandMask<'a, M, const D: usize> {
     sub: &'a Subdivision<M, D>,
-    /// Width in facet sizes; None: the whole mesh.
+    /// Width in bend lengths; None: the whole mesh.
     width: Option<f64>,
     /// Per fine node, whether it may move (None: all).
     mask: Option<Vec<bool>>,
@@ -812,7 +813,7 @@ impl<'a, M: Clone, const D: usize> BandMask<'a, M, D> {
         M: Subdividable<D, N>,
         RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
     {
-        self.mask = self.width.map(|w| self.sub.refine_mesh().band(parts, w)).filter(|m| m.iter().any(|&inside| !inside));
+        self.mask = self.width.map(|w| self.sub.band(parts, w)).filter(|m| m.iter().any(|&inside| !inside));
         if self.mask.is_none() {
             self.width = None;
         }
