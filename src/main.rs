@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
     after_help = "Exit codes: 0 success; 1 bad input (the message names the file, line, field or element); \
                   2 the mesh is or would be invalid (the elements are named, nothing is written); \
                   3 a linear solver failed (not the input's fault; nothing is written); \
-                  64 a usage error (an unknown option, a missing or malformed argument); 130 interrupted (Ctrl-C)."
+                  64 a usage error (an unknown option, a missing or malformed argument); \
+                  69 a library the command needs is absent (Gmsh's, for --cad); 130 interrupted (Ctrl-C)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -45,16 +46,25 @@ enum Command {
         #[arg(short, long, default_value = "out/demo")]
         out: PathBuf,
     },
-    /// Curve a user's linear mesh: bind its boundary groups to exact shapes
-    /// (a geometry file), run Algorithms 2 and 3, write OUT.msh (with
-    /// OUT.vtu, OUT.png, OUT.report.json beside it) if every element is
-    /// certified valid.
+    /// Curve a user's linear mesh: bind its boundary to exact shapes (the
+    /// CAD model it was meshed from, or a geometry file), run Algorithms 2
+    /// and 3, write OUT.msh (with OUT.vtu, OUT.png, OUT.report.json beside
+    /// it) if every element is certified valid.
     Curve {
         /// The linear triangle, quad, tetrahedral or hex mesh (Gmsh MSH 4.1, ASCII or binary, or MSH 2.2).
         mesh: PathBuf,
-        /// The geometry file (TOML `[[group]]` tables: name, kind, shape).
+        /// The CAD model the mesh was made from (.step/.stp, .iges/.igs,
+        /// .brep, .xao, .geo): every boundary entity is curved onto the
+        /// model's entity with its tag. Loads Gmsh's library (GPL-2+) at
+        /// run time: DEFORMESH_GMSH_LIB, else the Python `gmsh` package
+        /// (`pip install gmsh`), else the system's.
+        #[arg(long, required_unless_present = "geometry")]
+        cad: Option<PathBuf>,
+        /// The geometry file (TOML `[[group]]` tables: name, kind, shape);
+        /// with --cad it may set groups to `slip` or `fixed`, or give them
+        /// another shape.
         #[arg(long)]
-        geometry: PathBuf,
+        geometry: Option<PathBuf>,
         /// Element order p, 1 to 4.
         #[arg(long, default_value_t = 3)]
         order: usize,
@@ -187,7 +197,7 @@ fn run(cli: Cli) -> Result<()> {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out, "<built-in demo>")
         }
-        Command::Curve { mesh, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, out, format } => {
+        Command::Curve { mesh, cad, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, out, format } => {
             usage(shape_tolerance.is_finite() && shape_tolerance > 0.0, || format!("--shape-tolerance must be a positive number, got {shape_tolerance}"))?;
             deformesh::highorder::check_order(order).map_err(|e| Usage(format!("--order: {e}")))?;
             usage(steps != Some(0), || "--steps must be at least 1".into())?;
@@ -212,7 +222,8 @@ fn run(cli: Cli) -> Result<()> {
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, band, ..Default::default() };
             deformesh::io::folder::check_output_file(&out)?;
-            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, output: out.clone(), format, options, width: 900 };
+            let cad = cad.map(|model| deformesh::app::driver::CadSource { model, library: None });
+            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, cad, output: out.clone(), format, options, width: 900 };
             let bar = Bar::new();
             let r = deformesh::app::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
             bar.finish();

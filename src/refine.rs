@@ -31,7 +31,9 @@ use crate::lsfem::Constraint;
 use crate::mesh::element::{nodes_1d, simplex, Shape, Spacing};
 use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, PlaneCell, PlaneMesh, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
+use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// A coarse Q1 mesh that can be subdivided: its boundary facets (edges in
 /// 2D, faces in 3D) and how a fine mesh of the same kind is put together.
@@ -755,6 +757,9 @@ struct Carrier<const D: usize> {
     part: Option<usize>,
     /// Parameters stay within [0, 1] (moving carriers end at fixed nodes).
     bounded: bool,
+    /// An edge's own curve, where two parts meet along one
+    /// ([`BoundaryPart::meets`]): X is the closest point on it.
+    curve: Option<Arc<dyn ClosestPoint<D>>>,
 }
 
 impl<const D: usize> Carrier<D> {
@@ -873,8 +878,8 @@ pub fn refine_parts<const D: usize>(parts: &[BoundaryPart<D>]) -> Vec<BoundaryPa
         .iter()
         .map(|p| match &p.kind {
             PartKind::Slip { wall: Some(w) } => BoundaryPart {
-                name: p.name.clone(),
                 kind: PartKind::Move { target: w.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+                ..p.clone()
             },
             _ => p.clone(),
         })
@@ -923,7 +928,7 @@ impl<const D: usize> RefineBoundary<D> {
                     continue;
                 }
             };
-            let image = self.parts[k].image(car.start(place)).ok_or_else(|| DeformError::Unreachable {
+            let image = self.carrier_image(carrier, car.start(place)).ok_or_else(|| DeformError::Unreachable {
                 part: self.parts[k].name.clone(),
                 why: format!("the new high-order node {i} at {:?} has no image on the target", self.start[i]),
             })?;
@@ -998,15 +1003,20 @@ impl<const D: usize> RefineBoundary<D> {
         out
     }
 
-    fn image(&self, part: Option<usize>, p: [f64; D]) -> [f64; D] {
-        part.and_then(|k| self.parts[k].image(p)).unwrap_or(p)
+    /// The image X(p) of carrier `c`'s starting point p: on its curve, or
+    /// its part's; None where the part's correspondence finds none.
+    fn carrier_image(&self, c: usize, p: [f64; D]) -> Option<[f64; D]> {
+        let car = &self.carriers[c];
+        match &car.curve {
+            Some(curve) => Some(curve.closest_point(p)),
+            None => car.part.and_then(|k| self.parts[k].image(p)),
+        }
     }
 
     /// Γ_t(s) of a carrier and its velocity X(P₀(s)) − P₀(s).
     fn carrier_point(&self, c: usize, s: [f64; 2], t: f64) -> ([f64; D], [f64; D]) {
-        let car = &self.carriers[c];
-        let p0 = car.start(s);
-        let x = self.image(car.part, p0);
+        let p0 = self.carriers[c].start(s);
+        let x = self.carrier_image(c, p0).unwrap_or(p0);
         let v = std::array::from_fn(|i| x[i] - p0[i]);
         (std::array::from_fn(|i| p0[i] + t * v[i]), v)
     }
@@ -1185,6 +1195,14 @@ impl<const D: usize> BoundaryModel<D> for RefineBoundary<D> {
     }
 }
 
+/// The curve two of the parts `here` (of a coarse edge with midpoint
+/// `mid`) meet along ([`BoundaryPart::meets`]), the nearest to `mid` if
+/// they share several.
+fn meeting_curve<const D: usize>(parts: &[BoundaryPart<D>], here: &[usize], mid: [f64; D]) -> Option<Arc<dyn ClosestPoint<D>>> {
+    let shared = here.iter().flat_map(|&a| parts[a].meets.iter().filter(move |(b, _)| *b != a && here.contains(b)).flat_map(|(_, curves)| curves.iter()));
+    shared.min_by(|x, y| x.distance(mid).total_cmp(&y.distance(mid))).cloned()
+}
+
 /// Unit normal of a bilinear facet with corners `c` at s (zero if degenerate).
 fn facet_normal<const D: usize>(c: &[[f64; D]], s: [f64; 2]) -> [f64; 3] {
     if D != 3 || c.len() < 3 {
@@ -1294,14 +1312,16 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
         let mut carriers: Vec<Carrier<D>> = Vec::new();
         // one carrier per coarse facet, then one per coarse edge (3D)
         for (corners, &part) in self.facet_corners.iter().zip(&self.facet_parts) {
-            carriers.push(Carrier { corners: corners.clone(), part: moving(part).then_some(part), bounded: moving(part) });
+            carriers.push(Carrier { corners: corners.clone(), part: moving(part).then_some(part), bounded: moving(part), curve: None });
         }
         let edge_base = carriers.len();
         for (ends, facets) in &self.edges {
             let parts_here: Vec<usize> = facets.iter().map(|&f| self.facet_parts[f]).collect();
             let carrier_part = parts_here.iter().copied().find(|&k| moving(k));
-            // the edge's new nodes follow the first moving part only
-            if let Some(a) = carrier_part.filter(|_| !parts_here.iter().any(|&k| fixed(k))) {
+            let mid: [f64; D] = std::array::from_fn(|k| 0.5 * (ends[0][k] + ends[1][k]));
+            let curve = carrier_part.and_then(|_| meeting_curve(&parts, &parts_here, mid));
+            // else the edge's new nodes follow the first moving part only
+            if let Some(a) = carrier_part.filter(|_| curve.is_none() && !parts_here.iter().any(|&k| fixed(k))) {
                 let h = (0..D).map(|k| (ends[1][k] - ends[0][k]).powi(2)).sum::<f64>().sqrt();
                 for &b in parts_here.iter().filter(|&&b| b != a && moving(b)) {
                     for s in [0.25, 0.5, 0.75] {
@@ -1310,7 +1330,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
                     }
                 }
             }
-            carriers.push(Carrier { corners: ends.to_vec(), part: carrier_part, bounded: carrier_part.is_some() });
+            carriers.push(Carrier { corners: ends.to_vec(), part: carrier_part, bounded: carrier_part.is_some(), curve });
         }
         let start = self.mesh.nodes().to_vec();
         let mut roles = vec![Role2::Interior; start.len()];
@@ -1356,7 +1376,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
             if let Role2::Slide { carrier, s } = *role {
                 let car = &b.carriers[carrier];
                 if let Some(k) = car.part {
-                    if b.parts[k].image(car.start(s)).is_none() {
+                    if b.carrier_image(carrier, car.start(s)).is_none() {
                         return Err(DeformError::Unreachable {
                             part: b.parts[k].name.clone(),
                             why: format!("the new high-order node {i} at {:?} has no image on the target", b.start[i]),
@@ -1531,7 +1551,7 @@ mod tests {
                         "ymax" => PartKind::Move { target: b.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
                         _ => PartKind::Slip { wall: None },
                     };
-                    BoundaryPart { name: name.to_string(), kind }
+                    BoundaryPart::new(name, kind)
                 })
                 .collect()
         };

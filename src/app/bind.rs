@@ -127,7 +127,7 @@ impl GeometryFile {
             });
         }
         let unbound: Vec<String> = names.iter().zip(&kinds).filter(|(_, k)| k.is_none()).map(|(n, _)| n.clone()).collect();
-        let parts = names.iter().zip(kinds).map(|(n, k)| BoundaryPart { name: n.clone(), kind: k.unwrap_or(PartKind::Fixed) }).collect();
+        let parts = names.iter().zip(kinds).map(|(n, k)| BoundaryPart::new(n.clone(), k.unwrap_or(PartKind::Fixed))).collect();
         Ok((parts, unbound))
     }
 }

@@ -601,7 +601,7 @@ impl Case {
             }
             let line = spec.shape.as_ref().map_or(String::new(), |v| self.line_of(v.span().start));
             let kind = part_kind(spec).map_err(|m| err(format!("{line}{here}: {m}")))?;
-            parts.push(BoundaryPart { name: spec.name.clone(), kind });
+            parts.push(BoundaryPart::new(spec.name.clone(), kind));
         }
         // sides nobody named stay slip walls under their own name
         for (s, side) in sides.iter().enumerate() {
@@ -611,7 +611,7 @@ impl Case {
                 }
                 tracing::info!("side `{side}` is in no boundary part: it is a slip wall named `{side}`");
                 side_part[s] = parts.len();
-                parts.push(BoundaryPart { name: side.to_string(), kind: PartKind::Slip { wall: None } });
+                parts.push(BoundaryPart::new(*side, PartKind::Slip { wall: None }));
             }
         }
         Ok((parts, side_part))

@@ -83,6 +83,9 @@ pub enum RunError {
     /// What the input file holds cannot all be kept in the output.
     #[error("{0}: nothing was written")]
     Layout(#[from] crate::io::layout::LayoutError),
+    /// The CAD model cannot be read, or Gmsh's library is absent.
+    #[error(transparent)]
+    Cad(#[from] crate::geometry::cad::CadError),
     /// The input holds what `curve` cannot carry to its output (the CLI
     /// names the file).
     #[error("{why}")]
@@ -105,6 +108,9 @@ pub mod exit {
     pub const INVALID_MESH: i32 = 2;
     /// A linear solve failed (the solver, not the input; nothing written).
     pub const SOLVER: i32 = 3;
+    /// A library the command needs is absent (Gmsh's, for `--cad`):
+    /// BSD's EX_UNAVAILABLE.
+    pub const UNAVAILABLE: i32 = 69;
     /// The command line itself is wrong (unknown option, missing or
     /// unparsable argument): BSD's EX_USAGE.
     pub const USAGE: i32 = 64;
@@ -124,6 +130,7 @@ impl RunError {
             | RunError::Curve(CurveError::InvalidCoarse(_))
             | RunError::Curve(CurveError::Deform(DeformError::Tangled { .. })) => exit::INVALID_MESH,
             RunError::Deform(DeformError::Solve(_)) | RunError::Curve(CurveError::Deform(DeformError::Solve(_))) => exit::SOLVER,
+            RunError::Cad(crate::geometry::cad::CadError::Absent { .. } | crate::geometry::cad::CadError::Library { .. }) => exit::UNAVAILABLE,
             _ => exit::BAD_INPUT,
         }
     }
@@ -602,8 +609,12 @@ fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a [[f64; D]]>) 
 pub struct CurveJob {
     /// The linear quad or hex mesh (MSH 4.1).
     pub input: PathBuf,
-    /// The geometry file binding its groups to shapes.
-    pub geometry: PathBuf,
+    /// The geometry file binding its groups to shapes (with `cad`, it may
+    /// override groups: `slip`, `fixed`, another shape).
+    pub geometry: Option<PathBuf>,
+    /// The CAD model whose entities the mesh's boundary entities are
+    /// bound to by tag.
+    pub cad: Option<CadSource>,
     /// The curved mesh to write; the VTU, PNG and report go beside it
     /// under the same stem.
     pub output: PathBuf,
@@ -613,6 +624,35 @@ pub struct CurveJob {
     pub options: CurveOptions,
     /// Picture width in pixels.
     pub width: u32,
+}
+
+/// Where `curve --cad` finds its model and Gmsh.
+#[derive(Clone, Debug)]
+pub struct CadSource {
+    /// The STEP, IGES, BREP, XAO or `.geo` file.
+    pub model: PathBuf,
+    /// Gmsh's library (a file or a folder), before the search of
+    /// [`crate::geometry::cad`]'s loader.
+    pub library: Option<PathBuf>,
+}
+
+/// The CAD model of a `curve --cad` run, for its report.
+#[derive(Clone, Debug, Serialize)]
+pub struct CadReport {
+    /// The model file.
+    pub model: String,
+    /// The Gmsh library that read it.
+    pub library: String,
+    /// Its version.
+    pub gmsh_version: String,
+}
+
+/// How `curve` binds a mesh's boundary: a geometry file, a CAD model, or
+/// both (the file then overrides groups).
+struct Binding<'a> {
+    geometry: Option<&'a crate::app::bind::GeometryFile>,
+    gfile: &'a str,
+    model: Option<&'a std::sync::Arc<crate::geometry::cad::CadModel>>,
 }
 
 /// The format of the curved mesh `curve` writes.
@@ -695,6 +735,8 @@ pub struct CurveReport {
     pub cells: usize,
     /// Groups the geometry file does not name: their nodes stayed.
     pub unbound_groups: Vec<String>,
+    /// The CAD model (`--cad`), if any.
+    pub cad: Option<CadReport>,
     /// Clockwise input cells turned counter-clockwise (2D; the written
     /// mesh has them counter-clockwise).
     pub reoriented_cells: usize,
@@ -734,56 +776,70 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
     let read = crate::io::msh::parse_any(&bytes, true)?;
     unkept(&read.layout).map_err(|why| RunError::Unkept { path: job.input.clone(), why })?;
-    let geometry = crate::app::bind::GeometryFile::read(&job.geometry)?;
-    let gfile = job.geometry.display().to_string();
+    let geometry = job.geometry.as_deref().map(crate::app::bind::GeometryFile::read).transpose()?;
+    let gfile = job.geometry.as_ref().map_or(String::new(), |g| g.display().to_string());
+    if geometry.is_none() && job.cad.is_none() {
+        return Err(CaseError { file: job.input.display().to_string(), message: "nothing binds the mesh's boundary: give a geometry file or a CAD model (--cad)".into() }.into());
+    }
+    let model = match &job.cad {
+        Some(c) => {
+            std::fs::metadata(&c.model).map_err(|cause| RunError::Read { path: c.model.clone(), cause })?;
+            Some(crate::geometry::cad::CadModel::open(&c.model, c.library.as_deref())?)
+        }
+        None => None,
+    };
+    let binding = Binding { geometry: geometry.as_ref(), gfile: &gfile, model: model.as_ref() };
     // either may relax the check that curved groups lie on their shapes
     let mut job = job.clone();
-    job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.shape_tolerance.unwrap_or(0.0));
+    job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.as_ref().and_then(|g| g.shape_tolerance).unwrap_or(0.0));
     let fine_cells = |d: u32| job.options.order.max(1).pow(d);
     let tags = &read.cell_tags;
     let result = match read.mesh {
-        AnyMesh::Hexes(mesh) => curve_solid(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
-        AnyMesh::Tetrahedra(mesh) => curve_solid(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
-        AnyMesh::Quads(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
-        AnyMesh::Triangles(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
+        AnyMesh::Hexes(mesh) => curve_solid(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
+        AnyMesh::Tetrahedra(mesh) => curve_solid(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
+        AnyMesh::Quads(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
+        AnyMesh::Triangles(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         // curve_mixed names tangled cells by their coarse cell
-        AnyMesh::Mixed2(mesh) => curve_plane(mesh, &geometry, &gfile, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
+        AnyMesh::Mixed2(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
 }
 
 /// `curve` on a solid mesh of hexes or tetrahedra.
-fn curve_solid<const N: usize, const K: usize>(
-    mesh: SolidMesh<N, K>,
-    geometry: &crate::app::bind::GeometryFile,
-    gfile: &str,
-    job: (&CurveJob, &crate::io::layout::Layout),
-    progress: &mut impl FnMut(Progress),
-) -> Result<CurveReport, RunError>
+fn curve_solid<const N: usize, const K: usize>(mesh: SolidMesh<N, K>, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError>
 where
     SolidMesh<N, K>: Outputs<3, N>,
 {
-    let (parts, unbound) = geometry.parts::<3>(&mesh.part_names, gfile)?;
-    geometry.check_carried(&mesh.part_names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), mesh.part_names.len()), gfile)?;
+    let (gfile, names) = (binding.gfile, &mesh.part_names);
+    if let Some(model) = binding.model {
+        let facets: Vec<(Vec<usize>, usize)> = mesh.faces.iter().map(|f| (f.nodes.to_vec(), f.part)).collect();
+        let cad = crate::app::cad::bind::<3>(model, (job.1, &mesh.nodes), (&facets, names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
+        let mesh = SolidMesh::<N, K>::assemble(mesh.nodes, mesh.cells, cad.facets, cad.names);
+        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some(model)));
+    }
+    let geometry = binding.geometry.expect("a geometry file where there is no model");
+    let (parts, unbound) = geometry.parts::<3>(names, gfile)?;
+    geometry.check_carried(names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), names.len()), gfile)?;
     let (mesh, shared) = one_group_per_mesh_facet(&mesh, &unbound, gfile)?;
-    curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, progress)
+    curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
 }
 
 /// A linear plane mesh as `curve` takes it: quads, triangles or both.
 trait PlaneInput: Curvable<2> {
     /// See [`PlaneMesh::orient_counter_clockwise`].
     fn orient(&mut self) -> usize;
-    /// The part names and the boundary edges (to keep one copy of each).
-    fn boundary(&mut self) -> (&[String], &mut Vec<crate::mesh::BoundaryEdge>);
+    /// The nodes, the part names and the boundary edges (to keep one
+    /// copy of each, or regroup them by entity).
+    fn boundary(&mut self) -> (&[[f64; 2]], &mut Vec<String>, &mut Vec<crate::mesh::BoundaryEdge>);
 }
 
 impl<const N: usize> PlaneInput for PlaneMesh<N> {
     fn orient(&mut self) -> usize {
         self.orient_counter_clockwise()
     }
-    fn boundary(&mut self) -> (&[String], &mut Vec<crate::mesh::BoundaryEdge>) {
-        (&self.part_names, &mut self.edges)
+    fn boundary(&mut self) -> (&[[f64; 2]], &mut Vec<String>, &mut Vec<crate::mesh::BoundaryEdge>) {
+        (&self.nodes, &mut self.part_names, &mut self.edges)
     }
 }
 
@@ -791,31 +847,35 @@ impl PlaneInput for MixedPlaneMesh {
     fn orient(&mut self) -> usize {
         self.orient_counter_clockwise()
     }
-    fn boundary(&mut self) -> (&[String], &mut Vec<crate::mesh::BoundaryEdge>) {
-        (&self.part_names, &mut self.edges)
+    fn boundary(&mut self) -> (&[[f64; 2]], &mut Vec<String>, &mut Vec<crate::mesh::BoundaryEdge>) {
+        (&self.nodes, &mut self.part_names, &mut self.edges)
     }
 }
 
 /// `curve` on a plane mesh of quads, triangles or both.
-fn curve_plane(
-    mut mesh: impl PlaneInput,
-    geometry: &crate::app::bind::GeometryFile,
-    gfile: &str,
-    job: (&CurveJob, &crate::io::layout::Layout),
-    progress: &mut impl FnMut(Progress),
-) -> Result<CurveReport, RunError> {
+fn curve_plane(mut mesh: impl PlaneInput, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     // Gmsh may write a surface's cells clockwise (by its normal)
     let turned = mesh.orient();
-    let (names, edges) = mesh.boundary();
+    let gfile = binding.gfile;
+    let (nodes, names, edges) = mesh.boundary();
+    let to_edges = |facets: Vec<(Vec<usize>, usize)>| facets.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
+    if let Some(model) = binding.model {
+        let facets: Vec<(Vec<usize>, usize)> = edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
+        let cad = crate::app::cad::bind::<2>(model, (job.1, nodes), (&facets, names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
+        *edges = to_edges(cad.facets);
+        *names = cad.names;
+        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), turned, job, (progress, Some(model)));
+    }
+    let geometry = binding.geometry.expect("a geometry file where there is no model");
     let names = names.to_vec();
     let (parts, unbound) = geometry.parts::<2>(&names, gfile)?;
     geometry.check_carried(&names, &crate::app::bind::carried(edges.iter().map(|e| e.part), names.len()), gfile)?;
     let facets = edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
     let (kept, shared) = one_group_per_facet(facets, &names, &unbound, gfile)?;
     if let Some(kept) = kept {
-        *edges = kept.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
+        *edges = to_edges(kept);
     }
-    curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, progress)
+    curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, (progress, None))
 }
 
 /// The curved mesh in the job's format: the layout (every group, entity,
@@ -967,10 +1027,14 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     (unbound, shared): (Vec<String>, &[(usize, usize)]),
     reoriented: usize,
     (job, input): (&CurveJob, &crate::io::layout::Layout),
-    progress: &mut dyn FnMut(Progress),
+    (progress, model): (&mut dyn FnMut(Progress), Option<&std::sync::Arc<crate::geometry::cad::CadModel>>),
 ) -> Result<CurveReport, RunError> {
     let clock = Instant::now();
     let mut c = mesh.curve(parts, &job.options, progress)?;
+    // a projection Gmsh failed answered with the point itself
+    if let Some(e) = model.and_then(|m| m.failure()) {
+        return Err(e.into());
+    }
     // files store equispaced nodes (the same maps: certificates hold);
     // the node numbering stays
     let spacing = c.mesh.spacing;
@@ -1017,6 +1081,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
         dimension: D,
         cells: c.mesh.cells.len(),
         unbound_groups: unbound,
+        cad: model.map(|m| CadReport { model: m.file.display().to_string(), library: m.library.display().to_string(), gmsh_version: m.version.clone() }),
         reoriented_cells: reoriented,
         quality: c.quality.clone(),
         periodic_snap: snapped,

@@ -8,5 +8,6 @@
 
 pub mod bench;
 pub mod bind;
+pub mod cad;
 pub mod case;
 pub mod driver;

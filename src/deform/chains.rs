@@ -469,7 +469,7 @@ mod tests {
                         "top" => PartKind::Move { target: b.clone(), correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
                         _ => PartKind::Fixed,
                     };
-                    BoundaryPart { name: name.to_string(), kind }
+                    BoundaryPart::new(name, kind)
                 })
                 .collect()
         };

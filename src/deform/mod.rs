@@ -92,6 +92,19 @@ pub struct BoundaryPart<const D: usize = 2> {
     pub name: String,
     /// Its behaviour.
     pub kind: PartKind<D>,
+    /// Where it meets other parts along curves of their own (a CAD
+    /// model's edges, where two of its faces meet): `(other part, the
+    /// curves they share)`. Algorithm 2 puts the new nodes of a coarse
+    /// edge between the two on the curve nearest the edge, where a node
+    /// following one part's shape would leave the other's.
+    pub meets: Vec<(usize, Vec<Arc<dyn BoundaryShape<D>>>)>,
+}
+
+impl<const D: usize> BoundaryPart<D> {
+    /// A part meeting no other along a curve of its own.
+    pub fn new(name: impl Into<String>, kind: PartKind<D>) -> Self {
+        BoundaryPart { name: name.into(), kind, meets: Vec::new() }
+    }
 }
 
 /// Where moving parts `a` and `b` meet, a node follows `a`'s image: that

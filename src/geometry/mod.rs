@@ -22,6 +22,7 @@
 //! * The normal is outward for closed shapes; for open ones see
 //!   [`Shape`] and [`Surface`].
 
+pub mod cad;
 mod curve;
 mod ellipse;
 mod flat;

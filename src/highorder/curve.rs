@@ -1284,13 +1284,13 @@ mod tests {
                 let circle = crate::geometry::ShapeSpec::Circle { centre: [tx, ty], radius: s }.build().unwrap();
                 let parts: Vec<BoundaryPart<2>> = crate::mesh::BOX_SIDES
                     .iter()
-                    .map(|&name| BoundaryPart {
-                        name: name.to_string(),
-                        kind: if name == "bottom" {
+                    .map(|&name| {
+                        let kind = if name == "bottom" {
                             PartKind::Move { target: Arc::new(circle.clone()), correspondence: Correspondence::Normal, mode: MoveMode::Sliding }
                         } else {
                             PartKind::Fixed
-                        },
+                        };
+                        BoundaryPart::new(name, kind)
                     })
                     .collect();
                 let opts = CurveOptions { order: p, steps: Some(2), ..Default::default() };

@@ -140,3 +140,11 @@ pub const GAUSS5: [(f64, f64); 5] = [
     (0.7692346550528415, 0.23931433524968315),
     (0.9530899229693319, 0.11846344252809464),
 ];
+
+/// Gmsh's library of the test Python's `gmsh` package (what `--cad`
+/// loads), by `gmsh.libpath`.
+pub fn gmsh_lib() -> PathBuf {
+    let out = Command::new(python()).args(["-c", "import gmsh; print(gmsh.libpath)"]).output().expect("cannot start Python");
+    assert!(out.status.success(), "the test Python has no gmsh: {}", String::from_utf8_lossy(&out.stderr));
+    PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
+}

@@ -19,7 +19,7 @@ fn job(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> Cu
     std::fs::write(&g, geometry).unwrap();
     CurveJob {
         input: data(mesh),
-        geometry: g,
+        geometry: Some(g), cad: None,
         output: dir.join(format!("curved{order}.msh")),
         format: deformesh::app::driver::OutputFormat::Msh41,
         options: CurveOptions { order, steps: Some(steps), ..Default::default() },

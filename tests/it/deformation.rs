@@ -241,8 +241,8 @@ fn a_curved_slip_wall_keeps_its_nodes() {
     let first = quarter_disk("sliding");
     let circle: Arc<dyn BoundaryShape<2>> = Arc::new(ShapeSpec::Circle { centre: [0.0, 0.0], radius: 1.25 }.build().unwrap());
     let parts = vec![
-        BoundaryPart { name: "axes".into(), kind: PartKind::Slip { wall: None } },
-        BoundaryPart { name: "arc".into(), kind: PartKind::Slip { wall: Some(circle) } },
+        BoundaryPart::new("axes", PartKind::Slip { wall: None }),
+        BoundaryPart::new("arc", PartKind::Slip { wall: Some(circle) }),
     ];
     let field = JacobianField::expression(Expr::parse("0.2 + x", &deformesh::jacobian::EXPR_VARS).unwrap());
     let options = deformesh::deform::DeformOptions { steps: 20, ..Default::default() };

@@ -190,7 +190,7 @@ fn order_outside_1_to_4_is_an_error_naming_the_field() {
 fn an_invalid_coarse_mesh_is_not_curved() {
     let mut mesh = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 3);
     mesh.nodes[5] = [0.9, 0.9]; // folds the cells around node 5
-    let parts: Vec<BoundaryPart<2>> = (0..4).map(|k| BoundaryPart { name: format!("side{k}"), kind: PartKind::Slip { wall: None } }).collect();
+    let parts: Vec<BoundaryPart<2>> = (0..4).map(|k| BoundaryPart::new(format!("side{k}"), PartKind::Slip { wall: None })).collect();
     let err = curve(&mesh, &parts, &CurveOptions::default()).err().expect("an error");
     match &err {
         CurveError::InvalidCoarse(cells) => assert!(!cells.is_empty()),

@@ -44,7 +44,7 @@ fn curve_to(dir: &Path, input: &Path, geometry: &str, order: usize, out: &str, f
     let output = dir.join(out);
     let job = CurveJob {
         input: input.to_path_buf(),
-        geometry: g,
+        geometry: Some(g), cad: None,
         output: output.clone(),
         format,
         options: CurveOptions { order, ..Default::default() },

@@ -18,7 +18,7 @@ fn curve(dir: &Path, name: &str, mesh: &str, geometry: &str, p: usize) -> PathBu
     std::fs::write(&g, geometry).unwrap();
     let job = CurveJob {
         input: data(mesh),
-        geometry: g,
+        geometry: Some(g), cad: None,
         output: dir.join(format!("{name}.msh")),
         format: OutputFormat::Msh41,
         options: CurveOptions { order: p, ..Default::default() },

@@ -9,6 +9,7 @@ mod common;
 mod abaqus;
 mod adaptation;
 mod band;
+mod cad;
 mod cli;
 mod curve_import;
 mod deformation;

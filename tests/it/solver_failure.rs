@@ -22,7 +22,7 @@ fn job(dir: &Path, flow: DeformOptions) -> CurveJob {
     std::fs::create_dir_all(&out).unwrap();
     CurveJob {
         input: Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cylinder_bl_coarse.msh"),
-        geometry: g,
+        geometry: Some(g), cad: None,
         output: out.join("curved.msh"),
         format: OutputFormat::Msh41,
         options: CurveOptions { order: 2, steps: Some(4), flow, ..Default::default() },

@@ -1,0 +1,309 @@
+//! Gmsh's C API (`gmshc.h`), opened at run time.
+//!
+//! Why at run time: Gmsh is GPL-2+ and a large library; the crate builds,
+//! and every command but `curve --cad` runs, without it. It is found
+//! through `DEFORMESH_GMSH_LIB` (the library file, or a folder holding
+//! it), else the active Python's `gmsh` package (`pip install gmsh`
+//! ships `lib/libgmsh.so.4.15`), else the system's library path
+//! (Debian's `libgmsh-dev`).
+//!
+//! Gmsh keeps global state (one current model, not thread safe), so the
+//! library and its models live in one process-wide [`Session`] behind a
+//! mutex; each [`super::CadModel`] is a named Gmsh model made current
+//! before every call.
+
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+use super::CadError;
+
+/// The oldest Gmsh whose API matches the signatures below
+/// (`gmshInitialize` took its `run` argument in 4.11).
+pub const OLDEST: (u32, u32) = (4, 11);
+
+type ErrPtr = *mut c_int;
+
+/// The entry points of `libgmsh` the method calls, with their C types.
+struct Api {
+    free: unsafe extern "C" fn(*mut c_void),
+    initialize: unsafe extern "C" fn(c_int, *mut *mut c_char, c_int, c_int, ErrPtr),
+    option_set_number: unsafe extern "C" fn(*const c_char, f64, ErrPtr),
+    option_get_string: unsafe extern "C" fn(*const c_char, *mut *mut c_char, ErrPtr),
+    model_add: unsafe extern "C" fn(*const c_char, ErrPtr),
+    model_set_current: unsafe extern "C" fn(*const c_char, ErrPtr),
+    merge: unsafe extern "C" fn(*const c_char, ErrPtr),
+    get_entities: unsafe extern "C" fn(*mut *mut c_int, *mut usize, c_int, ErrPtr),
+    get_type: unsafe extern "C" fn(c_int, c_int, *mut *mut c_char, ErrPtr),
+    get_boundary: unsafe extern "C" fn(*const c_int, usize, *mut *mut c_int, *mut usize, c_int, c_int, c_int, ErrPtr),
+    closest_point: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_value: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_normal: unsafe extern "C" fn(c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_parametrization_bounds: unsafe extern "C" fn(c_int, c_int, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
+    last_error: unsafe extern "C" fn(*mut *mut c_char, ErrPtr),
+}
+
+/// The loaded library, initialised, and which of our models is current.
+pub struct Session {
+    api: Api,
+    // kept alive: the function pointers in `api` point into it
+    _lib: libloading::Library,
+    /// The library file.
+    pub path: PathBuf,
+    /// Gmsh's `General.Version`.
+    pub version: String,
+    current: Option<CString>,
+    models: usize,
+}
+
+// Gmsh's calls are made only through the mutex below, one at a time.
+unsafe impl Send for Session {}
+
+static SESSION: Mutex<Option<Session>> = Mutex::new(None);
+
+/// The process's Gmsh session, loading and initialising the library on
+/// first use (`library`: a file or folder given by the caller, before
+/// the search of [`find`]).
+pub fn session(library: Option<&Path>) -> Result<MutexGuard<'static, Option<Session>>, CadError> {
+    // a panic while the lock was held leaves Gmsh as it was: go on
+    let mut guard = SESSION.lock().unwrap_or_else(|e| e.into_inner());
+    if guard.is_none() {
+        *guard = Some(Session::load(library)?);
+    }
+    Ok(guard)
+}
+
+/// Where to look for the library, in order, and the names tried.
+fn candidates(library: Option<&Path>) -> Result<Vec<PathBuf>, CadError> {
+    let names = ["libgmsh.so.4.15", "libgmsh.so", "libgmsh.so.4.14", "libgmsh.so.4.13", "libgmsh.so.4.12", "libgmsh.so.4.11", "libgmsh.dylib", "gmsh.dll"];
+    let in_folder = |dir: &Path| names.iter().map(|n| dir.join(n)).collect::<Vec<_>>();
+    let given = library.map(Path::to_path_buf).or_else(|| std::env::var_os("DEFORMESH_GMSH_LIB").map(PathBuf::from));
+    if let Some(p) = given {
+        // a named place is the only one: falling back would hide the mistake
+        return Ok(if p.is_dir() { in_folder(&p) } else { vec![p] });
+    }
+    let mut out = Vec::new();
+    if let Some(p) = python_libpath() {
+        out.push(p);
+    }
+    // bare names: the dynamic loader's search (LD_LIBRARY_PATH, ldconfig)
+    out.extend(names.iter().map(PathBuf::from));
+    Ok(out)
+}
+
+/// `gmsh.libpath` of the active Python (`$VIRTUAL_ENV`'s, else
+/// `python3`'s), if it has the `gmsh` package.
+fn python_libpath() -> Option<PathBuf> {
+    let python = std::env::var_os("VIRTUAL_ENV").map(|v| PathBuf::from(v).join("bin/python")).filter(|p| p.exists()).unwrap_or_else(|| PathBuf::from("python3"));
+    let out = std::process::Command::new(python).args(["-c", "import gmsh; print(gmsh.libpath or '')"]).stderr(std::process::Stdio::null()).output().ok()?;
+    let text = String::from_utf8(out.stdout).ok()?;
+    let p = PathBuf::from(text.trim());
+    (out.status.success() && p.is_file()).then_some(p)
+}
+
+/// A function pointer of type `T` named `name` in `lib`.
+unsafe fn symbol<T: Copy>(lib: &libloading::Library, path: &Path, name: &str) -> Result<T, CadError> {
+    let c = CString::new(name).expect("no NUL in a symbol name");
+    unsafe { lib.get::<T>(c.as_bytes_with_nul()) }.map(|s| *s).map_err(|e| CadError::Library {
+        why: format!("`{}` has no `{name}` ({e}): it is not Gmsh's library, or a Gmsh older than {}.{}", path.display(), OLDEST.0, OLDEST.1),
+    })
+}
+
+impl Session {
+    fn load(library: Option<&Path>) -> Result<Session, CadError> {
+        let tried = candidates(library)?;
+        let named = library.is_some() || std::env::var_os("DEFORMESH_GMSH_LIB").is_some();
+        let mut why = Vec::new();
+        for path in &tried {
+            // SAFETY: loading Gmsh runs its static initialisers only
+            match unsafe { libloading::Library::new(path) } {
+                Ok(lib) => return Session::start(lib, path.clone()),
+                // a bare name is the loader's search: said once below
+                Err(e) if path.components().count() > 1 || named => why.push(format!("{}: {e}", path.display())),
+                Err(_) => {}
+            }
+        }
+        if !named {
+            if !tried.iter().any(|p| p.components().count() > 1) {
+                why.push("the Python `gmsh` package: not found (python3 -c \"import gmsh\")".into());
+            }
+            why.push("the system library path: no libgmsh.so (4.11 to 4.15)".into());
+        }
+        Err(CadError::Absent { named, tried: why })
+    }
+
+    fn start(lib: libloading::Library, path: PathBuf) -> Result<Session, CadError> {
+        // SAFETY: the types are those of gmshc.h (4.11 and later)
+        let api = unsafe {
+            Api {
+                free: symbol(&lib, &path, "gmshFree")?,
+                initialize: symbol(&lib, &path, "gmshInitialize")?,
+                option_set_number: symbol(&lib, &path, "gmshOptionSetNumber")?,
+                option_get_string: symbol(&lib, &path, "gmshOptionGetString")?,
+                model_add: symbol(&lib, &path, "gmshModelAdd")?,
+                model_set_current: symbol(&lib, &path, "gmshModelSetCurrent")?,
+                merge: symbol(&lib, &path, "gmshMerge")?,
+                get_entities: symbol(&lib, &path, "gmshModelGetEntities")?,
+                get_type: symbol(&lib, &path, "gmshModelGetType")?,
+                get_boundary: symbol(&lib, &path, "gmshModelGetBoundary")?,
+                closest_point: symbol(&lib, &path, "gmshModelGetClosestPoint")?,
+                get_value: symbol(&lib, &path, "gmshModelGetValue")?,
+                get_derivative: symbol(&lib, &path, "gmshModelGetDerivative")?,
+                get_normal: symbol(&lib, &path, "gmshModelGetNormal")?,
+                get_parametrization_bounds: symbol(&lib, &path, "gmshModelGetParametrizationBounds")?,
+                last_error: symbol(&lib, &path, "gmshLoggerGetLastError")?,
+            }
+        };
+        let mut s = Session { api, _lib: lib, path, version: String::new(), current: None, models: 0 };
+        let mut ierr = 0;
+        // no configuration files, no GUI or batch run
+        unsafe { (s.api.initialize)(0, std::ptr::null_mut(), 0, 0, &mut ierr) };
+        s.check(ierr, "gmshInitialize")?;
+        // quiet: errors come back through ierr and the logger
+        s.set_option("General.Terminal", 0.0)?;
+        s.version = s.option_string("General.Version")?;
+        let v: Vec<u32> = s.version.split('.').filter_map(|x| x.parse().ok()).collect();
+        if v.len() < 2 || (v[0], v[1]) < OLDEST {
+            return Err(CadError::Library { why: format!("`{}` is Gmsh {}; `--cad` needs Gmsh {}.{} or later (pip install gmsh)", s.path.display(), s.version, OLDEST.0, OLDEST.1) });
+        }
+        Ok(s)
+    }
+
+    /// Ok, or Gmsh's last error for a call that set `ierr`.
+    fn check(&self, ierr: c_int, call: &str) -> Result<(), CadError> {
+        if ierr == 0 {
+            return Ok(());
+        }
+        let mut msg: *mut c_char = std::ptr::null_mut();
+        let mut e2 = 0;
+        unsafe { (self.api.last_error)(&mut msg, &mut e2) };
+        let text = if msg.is_null() { String::new() } else { self.take_string(msg) };
+        Err(CadError::Gmsh { call: call.to_string(), message: text })
+    }
+
+    fn take_string(&self, p: *mut c_char) -> String {
+        let s = unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
+        unsafe { (self.api.free)(p.cast()) };
+        s
+    }
+
+    /// Copies Gmsh's array and frees it.
+    fn take<T: Copy>(&self, p: *mut T, n: usize) -> Vec<T> {
+        if p.is_null() {
+            return Vec::new();
+        }
+        let v = unsafe { std::slice::from_raw_parts(p, n) }.to_vec();
+        unsafe { (self.api.free)(p.cast()) };
+        v
+    }
+
+    fn set_option(&mut self, name: &str, value: f64) -> Result<(), CadError> {
+        let c = CString::new(name).expect("option names have no NUL");
+        let mut ierr = 0;
+        unsafe { (self.api.option_set_number)(c.as_ptr(), value, &mut ierr) };
+        self.check(ierr, name)
+    }
+
+    fn option_string(&mut self, name: &str) -> Result<String, CadError> {
+        let c = CString::new(name).expect("option names have no NUL");
+        let (mut p, mut ierr) = (std::ptr::null_mut(), 0);
+        unsafe { (self.api.option_get_string)(c.as_ptr(), &mut p, &mut ierr) };
+        self.check(ierr, name)?;
+        Ok(if p.is_null() { String::new() } else { self.take_string(p) })
+    }
+
+    /// Reads `file` into a new model of its own; returns the model's name.
+    pub fn open(&mut self, file: &Path) -> Result<CString, CadError> {
+        self.models += 1;
+        let name = CString::new(format!("deformesh-cad-{}", self.models)).expect("no NUL");
+        let path = CString::new(file.to_string_lossy().into_owned()).map_err(|_| CadError::Gmsh { call: "gmshMerge".into(), message: "the path has a NUL byte".into() })?;
+        let mut ierr = 0;
+        unsafe { (self.api.model_add)(name.as_ptr(), &mut ierr) };
+        self.check(ierr, "gmshModelAdd")?;
+        self.current = Some(name.clone());
+        unsafe { (self.api.merge)(path.as_ptr(), &mut ierr) };
+        self.check(ierr, "gmshMerge")?;
+        Ok(name)
+    }
+
+    /// Makes `model` current (cheap when it is).
+    pub fn select(&mut self, model: &CString) -> Result<(), CadError> {
+        if self.current.as_ref() == Some(model) {
+            return Ok(());
+        }
+        let mut ierr = 0;
+        unsafe { (self.api.model_set_current)(model.as_ptr(), &mut ierr) };
+        self.check(ierr, "gmshModelSetCurrent")?;
+        self.current = Some(model.clone());
+        Ok(())
+    }
+
+    /// The (dim, tag) of every entity of dimension `dim` of the current model.
+    pub fn entities(&self, dim: i32) -> Result<Vec<(i32, i32)>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_entities)(&mut p, &mut n, dim, &mut ierr) };
+        self.check(ierr, "gmshModelGetEntities")?;
+        Ok(self.take(p, n).chunks(2).map(|c| (c[0], c[1])).collect())
+    }
+
+    /// The entity's type: "Plane", "Line", "BSpline surface", …
+    pub fn entity_type(&self, dim: i32, tag: i32) -> Result<String, CadError> {
+        let (mut p, mut ierr) = (std::ptr::null_mut(), 0);
+        unsafe { (self.api.get_type)(dim, tag, &mut p, &mut ierr) };
+        self.check(ierr, "gmshModelGetType")?;
+        Ok(if p.is_null() { String::new() } else { self.take_string(p) })
+    }
+
+    /// The tags of the entities of dimension `dim − 1` bounding (dim, tag).
+    pub fn boundary(&self, dim: i32, tag: i32) -> Result<Vec<i32>, CadError> {
+        let dt = [dim, tag];
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_boundary)(dt.as_ptr(), 2, &mut p, &mut n, 0, 0, 0, &mut ierr) };
+        self.check(ierr, "gmshModelGetBoundary")?;
+        Ok(self.take(p, n).chunks(2).map(|c| c[1].abs()).collect())
+    }
+
+    /// The closest points of (dim, tag) to `points` (x, y, z each) and
+    /// their parameters (1 or 2 each).
+    pub fn closest(&self, dim: i32, tag: i32, points: &[f64]) -> Result<(Vec<f64>, Vec<f64>), CadError> {
+        let (mut xp, mut xn, mut up, mut un, mut ierr) = (std::ptr::null_mut(), 0usize, std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.closest_point)(dim, tag, points.as_ptr(), points.len(), &mut xp, &mut xn, &mut up, &mut un, &mut ierr) };
+        self.check(ierr, "gmshModelGetClosestPoint")?;
+        Ok((self.take(xp, xn), self.take(up, un)))
+    }
+
+    /// The points of (dim, tag) at parameters `uv` (for a point entity:
+    /// its coordinates).
+    pub fn value(&self, dim: i32, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_value)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
+        self.check(ierr, "gmshModelGetValue")?;
+        Ok(self.take(p, n))
+    }
+
+    /// The first derivatives of (dim, tag) at `uv`: per point, x_t (a
+    /// curve) or x_u then x_v (a surface).
+    pub fn derivative(&self, dim: i32, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_derivative)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
+        self.check(ierr, "gmshModelGetDerivative")?;
+        Ok(self.take(p, n))
+    }
+
+    /// The parameter ranges `(min, max)` of (dim, tag), one per parameter.
+    pub fn parameter_bounds(&self, dim: i32, tag: i32) -> Result<(Vec<f64>, Vec<f64>), CadError> {
+        let (mut lo, mut nlo, mut hi, mut nhi, mut ierr) = (std::ptr::null_mut(), 0usize, std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_parametrization_bounds)(dim, tag, &mut lo, &mut nlo, &mut hi, &mut nhi, &mut ierr) };
+        self.check(ierr, "gmshModelGetParametrizationBounds")?;
+        Ok((self.take(lo, nlo), self.take(hi, nhi)))
+    }
+
+    /// The unit normals of surface `tag` at `uv`.
+    pub fn normal(&self, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_normal)(tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
+        self.check(ierr, "gmshModelGetNormal")?;
+        Ok(self.take(p, n))
+    }
+}
