@@ -369,6 +369,7 @@ impl Layout {
                 entity[n].get_or_insert((el.shape.dim(), el.entity));
             }
         }
+        on_input_curves(elements, &mut entity, of_input);
         // a node in no element at all (none is made so) stays on the first cell's entity
         let fallback = elements.iter().max_by_key(|e| e.shape.dim()).map_or((0, 0), |e| (e.shape.dim(), e.entity));
         entity.into_iter().map(|e| e.unwrap_or(fallback)).collect()
@@ -483,6 +484,45 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// `m x` for a 3×4 affine map.
 fn apply(m: &[f64; 12], x: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|r| m[4 * r] * x[0] + m[4 * r + 1] * x[1] + m[4 * r + 2] * x[2] + m[4 * r + 3])
+}
+
+/// Puts the new nodes of a solid's mesh edge that runs along a curve of
+/// the input on that curve: an edge whose ends the input classifies on
+/// curve c (or one on c, one on a point), in faces of two entities (where
+/// two surfaces meet). A file that saves no line elements (physical
+/// groups on surfaces only) still gets them right: a CAD check of the
+/// written file projects them onto the curve they were put on.
+fn on_input_curves(elements: &[Element], entity: &mut [Option<(usize, i64)>], of_input: &[usize]) {
+    if elements.iter().all(|e| e.shape.dim() < 3) {
+        return;
+    }
+    let mut old = vec![false; entity.len()];
+    for &n in of_input {
+        old[n] = true;
+    }
+    let mut edges: HashMap<(usize, usize), (Vec<usize>, Vec<i64>)> = HashMap::new();
+    for el in elements.iter().filter(|e| e.shape.dim() == 2) {
+        let ends = corner_indices(Shape::Line, el.order);
+        for (_, sub) in sub_elements(el.shape, el.order, 1) {
+            let (a, b) = (el.nodes[sub[ends[0]]], el.nodes[sub[ends[1]]]);
+            let e = edges.entry((a.min(b), a.max(b))).or_insert_with(|| (sub.iter().map(|&i| el.nodes[i]).filter(|&n| !old[n]).collect(), Vec::new()));
+            if !e.1.contains(&el.entity) {
+                e.1.push(el.entity);
+            }
+        }
+    }
+    for ((a, b), (inner, faces)) in edges {
+        let curve = match (entity[a], entity[b]) {
+            (Some((1, c)), Some((1, d))) if c == d => c,
+            (Some((1, c)), Some((0, _))) | (Some((0, _)), Some((1, c))) => c,
+            _ => continue,
+        };
+        if faces.len() >= 2 {
+            for n in inner {
+                entity[n] = Some((1, curve));
+            }
+        }
+    }
 }
 
 /// Local indices of the corners of an element of order `p`: tensor order

@@ -11,7 +11,7 @@ use deformesh::geometry::ClosestPoint;
 /// of tests/python/cad_primitives.py, read back from their STEP file.
 fn primitives(dir: &std::path::Path) -> std::sync::Arc<CadModel> {
     let step = dir.join("primitives.step");
-    common::run_script("cad_primitives.py", &[&step]);
+    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("shapes"), step.as_os_str()]);
     CadModel::open(&step, Some(&common::gmsh_lib())).unwrap()
 }
 
@@ -42,4 +42,147 @@ fn step_surfaces_answer_as_the_exact_shapes() {
     }
     assert!(model.failure().is_none(), "{:?}", model.failure());
     assert!(worst[0] < 1e-12 && worst[1] < 1e-12 && worst[2] < 1e-12, "closest point, normal, sphere distance: {worst:?}");
+}
+
+use deformesh::app::driver::{curve_file, CadSource, CurveJob, CurveReport, OutputFormat, RunError};
+use deformesh::highorder::curve::CurveOptions;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// tests/python/cad_models.py `kind` into `dir` (`args` more options):
+/// the mesh, the model it is bound to (the STEP; for the wing the BREP
+/// its meshing session wrote, see the script), and what the script
+/// printed (Gmsh's own curving with `--peers`).
+fn model(dir: &Path, kind: &str, args: &[&str]) -> (PathBuf, PathBuf, Option<Value>) {
+    let mut all = vec![kind.to_string(), dir.display().to_string()];
+    all.extend(args.iter().map(|s| s.to_string()));
+    let out = common::run_script("cad_models.py", &all);
+    let peers = (!out.is_empty()).then(|| serde_json::from_slice(&out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out))));
+    let ext = if kind == "wing" { "brep" } else { "step" };
+    (dir.join(format!("{kind}.msh")), dir.join(format!("{kind}.{ext}")), peers)
+}
+
+/// `curve MESH --cad MODEL` at order p (a geometry file too if given).
+fn curve_cad(dir: &Path, mesh: &Path, cad: Option<&Path>, geometry: Option<&str>, p: usize) -> Result<(CurveReport, PathBuf), RunError> {
+    let geometry = geometry.map(|text| {
+        let g = dir.join("geometry.toml");
+        std::fs::write(&g, text).unwrap();
+        g
+    });
+    let tag = if cad.is_some() { "cad" } else { "geometry" };
+    let output = dir.join(format!("{}_{tag}_p{p}.msh", mesh.file_stem().unwrap().to_string_lossy()));
+    let cad = cad.map(|m| CadSource { model: m.to_path_buf(), library: Some(common::gmsh_lib()) });
+    let job = CurveJob { input: mesh.to_path_buf(), geometry, cad, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300 };
+    curve_file(&job, |_| {}).map(|r| (r, output))
+}
+
+/// tests/python/check_cad.py: the real Gmsh opens `step`, merges `mesh`
+/// and measures it against the CAD.
+fn judged(step: &Path, mesh: &Path) -> Value {
+    let out = common::run_script("check_cad.py", &[step, mesh]);
+    serde_json::from_slice(&out).unwrap()
+}
+
+/// The checks every curved CAD mesh must pass: the real Gmsh finds every
+/// element valid, every node on the CAD entity it is classified on (the
+/// curves where faces meet included) to 1e-10, our sampled boundary
+/// error is Gmsh's measure of it, and within 2× of Gmsh's `setOrder` on
+/// the same mesh (`peer`, its sampled distance). Returns Gmsh's figures.
+fn on_its_cad(step: &Path, out: &Path, r: &CurveReport, peer: f64) -> Value {
+    assert!(r.quality.invalid_elements.is_empty());
+    let g = judged(step, out);
+    assert_eq!(g["invalid"].as_u64(), Some(0), "Gmsh finds invalid elements: {g}");
+    assert!(g["min_det_jac"].as_f64().unwrap() > 0.0, "{g}");
+    for dim in ["0", "1", "2"] {
+        let d = g["node_distance"][dim].as_f64().unwrap_or(0.0);
+        assert!(d <= 1e-10, "nodes of dimension {dim} are {d:e} off their CAD entity: {}", g["worst"][dim]);
+    }
+    let ours = r.quality.boundary_sample_distance;
+    let boundary = (r.dimension - 1).to_string();
+    let theirs = g["sample_distance"][&boundary].as_f64().unwrap();
+    assert!((ours - theirs).abs() <= 0.05 * theirs + 1e-14, "our sampled boundary error {ours:e}, Gmsh's measure of it {theirs:e}");
+    assert!(ours <= 2.0 * peer, "boundary error {ours:e} against Gmsh setOrder's {peer:e}");
+    g
+}
+
+/// Gmsh's `setOrder` figures from `--peers`.
+fn setorder(peers: &Option<Value>) -> (u64, f64) {
+    let s = &peers.as_ref().expect("--peers printed")["setorder"];
+    (s["invalid"].as_u64().unwrap(), s["boundary_sample_distance"].as_f64().unwrap())
+}
+
+#[test]
+fn a_naca_section_with_a_boundary_layer_is_curved_onto_its_step() {
+    let dir = tempfile::tempdir().unwrap();
+    for p in [2, 3] {
+        let (mesh, step, peers) = model(dir.path(), "naca2d", &["--peers", &p.to_string()]);
+        let (invalid, peer) = setorder(&peers);
+        let (r, out) = curve_cad(dir.path(), &mesh, Some(&step), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
+        on_its_cad(&step, &out, &r, peer);
+        assert_eq!(r.cad.as_ref().unwrap().gmsh_version.split('.').next(), Some("4"));
+        eprintln!("naca2d p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder: {invalid} invalid, {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
+    }
+}
+
+#[test]
+fn a_filleted_box_of_tetrahedra_is_curved_onto_its_faces_and_their_edges() {
+    let dir = tempfile::tempdir().unwrap();
+    for p in [2, 3] {
+        let (mesh, step, peers) = model(dir.path(), "fillet_box", &["--peers", &p.to_string()]);
+        let (_, peer) = setorder(&peers);
+        let (r, out) = curve_cad(dir.path(), &mesh, Some(&step), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
+        let g = on_its_cad(&step, &out, &r, peer);
+        // nodes on the curves where the faces meet were judged
+        assert!(g["entities"].as_array().unwrap().iter().any(|e| e["dim"] == 1 && e["nodes"].as_u64().unwrap() > 0), "{}", g["entities"]);
+        eprintln!("fillet_box p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
+    }
+}
+
+#[test]
+fn an_extruded_naca_wing_of_hexahedra_is_curved_onto_its_step() {
+    let dir = tempfile::tempdir().unwrap();
+    for p in [2, 3] {
+        let (mesh, brep, peers) = model(dir.path(), "wing", &["--peers", &p.to_string()]);
+        let (_, peer) = setorder(&peers);
+        let (r, out) = curve_cad(dir.path(), &mesh, Some(&brep), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
+        let g = on_its_cad(&brep, &out, &r, peer);
+        // the file saves no line elements (groups on surfaces only): the
+        // new nodes along the wing's edges are put on their curves
+        let on_curves: u64 = g["entities"].as_array().unwrap().iter().filter(|e| e["dim"] == 1).map(|e| e["nodes"].as_u64().unwrap()).sum();
+        assert!(on_curves >= 40 * (p as u64 - 1), "{on_curves} nodes on curves: {}", g["entities"]);
+        eprintln!("wing p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
+    }
+}
+
+#[test]
+fn a_step_circle_and_the_exact_circle_curve_a_mesh_alike() {
+    let dir = tempfile::tempdir().unwrap();
+    let (step, mesh) = (dir.path().join("disk.step"), dir.path().join("disk.msh"));
+    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("disk"), step.as_os_str(), mesh.as_os_str()]);
+    // without physical groups the circle is entity 5: `curve5`
+    let circle = "[[group]]\nname = \"curve5\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 0.5 }\n";
+    for p in [2, 3] {
+        let (a, _) = curve_cad(dir.path(), &mesh, Some(&step), None, p).unwrap();
+        let (b, _) = curve_cad(dir.path(), &mesh, None, Some(circle), p).unwrap();
+        assert!(a.quality.invalid_elements.is_empty() && b.quality.invalid_elements.is_empty());
+        let rel = |x: f64, y: f64| (x - y).abs() / y.abs();
+        // the square's sides slip with CAD, stay without: the wall is the same
+        assert!(rel(a.quality.min_det_j, b.quality.min_det_j) < 1e-9, "p = {p}: min det J {} against {}", a.quality.min_det_j, b.quality.min_det_j);
+        assert!(rel(a.quality.boundary_sample_distance, b.quality.boundary_sample_distance) < 1e-6, "p = {p}: {} against {}", a.quality.boundary_sample_distance, b.quality.boundary_sample_distance);
+    }
+}
+
+#[test]
+fn a_mesh_of_another_model_or_with_renumbered_entities_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (disk_step, disk_mesh) = (dir.path().join("disk.step"), dir.path().join("disk.msh"));
+    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("disk"), disk_step.as_os_str(), disk_mesh.as_os_str()]);
+    let (mesh, step, _) = model(dir.path(), "naca2d", &["--renumber"]);
+    // the airfoil's mesh against the disk's model: curve 6 is not there
+    let e = curve_cad(dir.path(), &mesh, Some(&disk_step), None, 2).err().expect("refused").to_string();
+    assert!(e.contains("curve 6 is not in the model") && e.contains(".brep"), "{e}");
+    // renumbered: the tags exist but name other curves; a node is named
+    let e = curve_cad(dir.path(), &mesh, Some(&step), None, 2).err().expect("refused").to_string();
+    assert!(e.contains("node ") && e.contains("from the model's curve") && e.contains("same Gmsh version"), "{e}");
+    assert!(std::fs::read_dir(dir.path()).unwrap().all(|f| !f.unwrap().file_name().to_string_lossy().contains("_cad_")), "nothing written");
 }

@@ -707,3 +707,22 @@ fn the_help_says_quad_and_hex() {
     assert_eq!(ran.code, Some(0));
     assert!(ran.stdout.contains("quad and hex meshes"), "{}", ran.stdout);
 }
+
+#[test]
+fn curve_cad_without_gmsh_says_how_to_install_it_and_exits_69() {
+    let dir = TempDir::new().unwrap();
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cylinder_bl_coarse.msh");
+    let step = dir.path().join("model.step");
+    std::fs::write(&step, "ISO-10303-21;\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_deformesh"))
+        .args(["curve", mesh.to_str().unwrap(), "--cad", step.to_str().unwrap(), "-o"])
+        .arg(dir.path().join("out.msh"))
+        .env("DEFORMESH_GMSH_LIB", dir.path().join("nowhere/libgmsh.so"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(69), "{err}");
+    assert!(err.contains("DEFORMESH_GMSH_LIB") && err.contains("pip install gmsh") && err.contains("nowhere"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|f| f.unwrap().file_name()).collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("model.step")], "nothing written");
+}

@@ -39,6 +39,8 @@ struct Api {
     closest_point: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
     get_value: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_bounding_box: unsafe extern "C" fn(c_int, c_int, *mut f64, *mut f64, *mut f64, *mut f64, *mut f64, *mut f64, ErrPtr),
+    get_second_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_normal: unsafe extern "C" fn(c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_parametrization_bounds: unsafe extern "C" fn(c_int, c_int, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
     last_error: unsafe extern "C" fn(*mut *mut c_char, ErrPtr),
@@ -150,6 +152,8 @@ impl Session {
                 closest_point: symbol(&lib, &path, "gmshModelGetClosestPoint")?,
                 get_value: symbol(&lib, &path, "gmshModelGetValue")?,
                 get_derivative: symbol(&lib, &path, "gmshModelGetDerivative")?,
+                get_bounding_box: symbol(&lib, &path, "gmshModelGetBoundingBox")?,
+                get_second_derivative: symbol(&lib, &path, "gmshModelGetSecondDerivative")?,
                 get_normal: symbol(&lib, &path, "gmshModelGetNormal")?,
                 get_parametrization_bounds: symbol(&lib, &path, "gmshModelGetParametrizationBounds")?,
                 last_error: symbol(&lib, &path, "gmshLoggerGetLastError")?,
@@ -288,6 +292,26 @@ impl Session {
         let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
         unsafe { (self.api.get_derivative)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
         self.check(ierr, "gmshModelGetDerivative")?;
+        Ok(self.take(p, n))
+    }
+
+    /// The bounding box `[min, max]` of (dim, tag).
+    pub fn bounding_box(&self, dim: i32, tag: i32) -> Result<[[f64; 3]; 2], CadError> {
+        let (mut b, mut ierr) = ([[0.0; 3]; 2], 0);
+        let [lo, hi] = &mut b;
+        let [x0, y0, z0] = lo;
+        let [x1, y1, z1] = hi;
+        unsafe { (self.api.get_bounding_box)(dim, tag, x0, y0, z0, x1, y1, z1, &mut ierr) };
+        self.check(ierr, "gmshModelGetBoundingBox")?;
+        Ok(b)
+    }
+
+    /// The second derivatives of (dim, tag) at `uv`: per point, x_tt (a
+    /// curve) or x_uu, x_vv, x_uv (a surface).
+    pub fn second_derivative(&self, dim: i32, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_second_derivative)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
+        self.check(ierr, "gmshModelGetSecondDerivative")?;
         Ok(self.take(p, n))
     }
 

@@ -153,7 +153,7 @@ impl CadModel {
 
     /// Entity (dim, tag) as a shape: dim 1 a curve, 2 a surface.
     pub fn shape(self: &Arc<Self>, dim: usize, tag: i32) -> CadShape {
-        CadShape { model: self.clone(), dim: dim as i32, tag, memo: Arc::new(Mutex::new((HashMap::new(), None))) }
+        CadShape { model: self.clone(), dim: dim as i32, tag, known: Arc::new(Mutex::new(Known::default())) }
     }
 
     /// The first query Gmsh failed, if any: its answers are not on the
@@ -173,12 +173,41 @@ pub struct CadShape {
     model: Arc<CadModel>,
     dim: i32,
     tag: i32,
-    /// Answers given: query (bits) → foot point and normal; and the
-    /// parameter range, once asked.
-    memo: Arc<Mutex<(Memo, Option<[[f64; 2]; 2]>)>>,
+    /// What it has learnt of itself (see [`Known`]).
+    known: Arc<Mutex<Known>>,
 }
 
-type Memo = HashMap<[u64; 4], ([f64; 3], [f64; 3])>;
+/// A shape's answers so far: each query's answer, exactly, up to
+/// [`MEMO_SIZE`]; the parameters of a foot per seed cell, from which a
+/// query nearby starts Newton's method; the parameter range; and the sign
+/// that turns ∂u × ∂v into Gmsh's normal of a surface.
+#[derive(Debug, Default)]
+struct Known {
+    memo: HashMap<[u64; 4], ([f64; 3], [f64; 3])>,
+    seeds: HashMap<[i64; 3], [f64; 2]>,
+    /// Range, seed cell size, normal sign: found at the first query.
+    frame: Option<Frame>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    range: [[f64; 2]; 2],
+    cell: f64,
+    sign: f64,
+}
+
+/// A seed cell's side, as a fraction of the entity's bounding box: a query
+/// starts from a foot found for a point this close (the feet of such
+/// points are close unless the point is near the shape's medial axis,
+/// which the nodes and samples of a mesh on the shape are not).
+const SEED_CELL: f64 = 1e-3;
+
+/// The foot of a query, its parameters and its first derivatives.
+struct Foot {
+    x: [f64; 3],
+    uv: [f64; 2],
+    d: [[f64; 3]; 2],
+}
 
 impl CadShape {
     /// Its entity tag.
@@ -196,39 +225,17 @@ impl CadShape {
     /// the tangent turned clockwise).
     fn project(&self, p: [f64; 3], planar: bool) -> ([f64; 3], [f64; 3]) {
         let key = [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), planar as u64];
-        let mut guard = self.memo.lock().unwrap_or_else(|e| e.into_inner());
-        let (memo, range) = &mut *guard;
-        if let Some(&r) = memo.get(&key) {
+        let mut known = self.known.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(&r) = known.memo.get(&key) {
             return r;
         }
-        let found = self.model.with(|s| {
-            let (x, uv) = s.closest(self.dim, self.tag, &p)?;
-            let k = self.dim as usize;
-            if x.len() < 3 || uv.len() < k {
-                return Err(CadError::Gmsh { call: "gmshModelGetClosestPoint".into(), message: format!("no point of entity ({}, {}) found", self.dim, self.tag) });
-            }
-            if range.is_none() {
-                let (lo, hi) = s.parameter_bounds(self.dim, self.tag)?;
-                let two = |v: &[f64]| [v.first().copied().unwrap_or(0.0), v.get(1).copied().unwrap_or(0.0)];
-                *range = Some([two(&lo), two(&hi)]);
-            }
-            let uv = [uv[0], if k == 2 { uv[1] } else { 0.0 }];
-            let (q, uv) = self.at_range_edge(s, p, ([x[0], x[1], x[2]], uv), range.expect("set"))?;
-            let n = if self.dim == 2 {
-                let n = s.normal(self.tag, &uv[..k])?;
-                [n[0], n[1], n[2]]
-            } else {
-                let t = s.derivative(1, self.tag, &uv[..k])?;
-                curve_normal([t[0], t[1], t[2]], sub(p, q), planar)
-            };
-            Ok((q, n))
-        });
-        match found {
+        match self.model.with(|s| self.solve(s, &mut known, p, planar)) {
             Ok(r) => {
-                if memo.len() >= MEMO_SIZE {
-                    memo.clear();
+                if known.memo.len() >= MEMO_SIZE {
+                    known.memo.clear();
+                    known.seeds.clear();
                 }
-                memo.insert(key, r);
+                known.memo.insert(key, r);
                 r
             }
             Err(e) => {
@@ -237,55 +244,137 @@ impl CadShape {
             }
         }
     }
+
+    /// The foot of `p` and the normal there: Newton's method from the foot
+    /// of a query in `p`'s seed cell, else from Gmsh's projection (70 µs
+    /// on a B-spline face against a few µs for Newton's evaluations).
+    fn solve(&self, s: &gmsh::Session, known: &mut Known, p: [f64; 3], planar: bool) -> Result<([f64; 3], [f64; 3]), CadError> {
+        let frame = match known.frame {
+            Some(f) => f,
+            None => *known.frame.insert(self.frame(s)?),
+        };
+        let cell = p.map(|c| (c / frame.cell).floor() as i64);
+        let seeded = match known.seeds.get(&cell) {
+            Some(&uv) => self.newton(s, p, uv, frame.range, false)?,
+            None => None,
+        };
+        let foot = match seeded {
+            Some(f) => f,
+            None => self.from_gmsh(s, p, frame.range)?,
+        };
+        known.seeds.insert(cell, foot.uv);
+        let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
+        Ok((foot.x, n))
+    }
+
+    /// The entity's parameter range, seed cell, and normal sign.
+    fn frame(&self, s: &gmsh::Session) -> Result<Frame, CadError> {
+        let (lo, hi) = s.parameter_bounds(self.dim, self.tag)?;
+        let two = |v: &[f64]| [v.first().copied().unwrap_or(0.0), v.get(1).copied().unwrap_or(0.0)];
+        let range = [two(&lo), two(&hi)];
+        let [b0, b1] = s.bounding_box(self.dim, self.tag)?;
+        let cell = SEED_CELL * norm(sub(b1, b0)).max(f64::MIN_POSITIVE);
+        let mut sign = 1.0;
+        if self.dim == 2 {
+            // Gmsh's normal follows the face's orientation: compare once
+            let mid = [0.5 * (range[0][0] + range[1][0]), 0.5 * (range[0][1] + range[1][1])];
+            let d = s.derivative(2, self.tag, &mid)?;
+            let c = cross3([d[0], d[1], d[2]], [d[3], d[4], d[5]]);
+            let n = s.normal(self.tag, &mid)?;
+            sign = if dot(c, [n[0], n[1], n[2]]) < 0.0 { -1.0 } else { 1.0 };
+        }
+        Ok(Frame { range, cell, sign })
+    }
+
+    /// Gmsh's projection of `p`, polished by Newton's method (its own is
+    /// only about 1e-9 of the model's size close, and at the edge of a
+    /// curve's range it answers parameter 0 whichever end is nearer).
+    fn from_gmsh(&self, s: &gmsh::Session, p: [f64; 3], range: [[f64; 2]; 2]) -> Result<Foot, CadError> {
+        let (x, uv) = s.closest(self.dim, self.tag, &p)?;
+        let k = self.dim as usize;
+        if x.len() < 3 || uv.len() < k {
+            return Err(CadError::Gmsh { call: "gmshModelGetClosestPoint".into(), message: format!("no point of entity ({}, {}) found", self.dim, self.tag) });
+        }
+        let mut start = ([x[0], x[1], x[2]], [uv[0], if k == 2 { uv[1] } else { 0.0 }]);
+        if k == 1 {
+            for end in [range[0][0], range[1][0]] {
+                let e = s.value(1, self.tag, &[end])?;
+                let e = [e[0], e[1], e[2]];
+                if norm(sub(p, e)) < norm(sub(p, start.0)) {
+                    start = (e, [end, 0.0]);
+                }
+            }
+        }
+        if let Some(f) = self.newton(s, p, start.1, range, true)? {
+            if norm(sub(p, f.x)) <= norm(sub(p, start.0)) {
+                return Ok(f);
+            }
+        }
+        let d = s.derivative(self.dim, self.tag, &start.1[..k])?;
+        Ok(Foot { x: start.0, uv: start.1, d: tangents(&d, k) })
+    }
+
+    /// Newton's method on |S(uv) − p|² from `uv`, the parameters kept in
+    /// `range`: the foot, or None where it does not converge (or the
+    /// Hessian is not positive there: a point near the medial axis). A
+    /// step beyond the range is cut back to it only where `edge` allows;
+    /// else None: across a closed curve's or surface's seam the foot is on
+    /// the range's other side, which Gmsh's projection finds.
+    fn newton(&self, s: &gmsh::Session, p: [f64; 3], mut uv: [f64; 2], range: [[f64; 2]; 2], edge: bool) -> Result<Option<Foot>, CadError> {
+        let k = self.dim as usize;
+        let mut x = s.value(self.dim, self.tag, &uv[..k])?;
+        for _ in 0..16 {
+            let d = tangents(&s.derivative(self.dim, self.tag, &uv[..k])?, k);
+            let dd = s.second_derivative(self.dim, self.tag, &uv[..k])?;
+            let r = sub([x[0], x[1], x[2]], p);
+            let second = |j: usize| [dd[3 * j], dd[3 * j + 1], dd[3 * j + 2]];
+            let step = if k == 1 {
+                let h = dot(d[0], d[0]) + dot(second(0), r);
+                if !(h > 0.0) {
+                    return Ok(None);
+                }
+                [-dot(d[0], r) / h, 0.0]
+            } else {
+                // x_uu, x_vv, x_uv
+                let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
+                let det = huu * hvv - huv * huv;
+                if !(huu > 0.0 && det > 0.0) {
+                    return Ok(None);
+                }
+                let (gu, gv) = (dot(d[0], r), dot(d[1], r));
+                [-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det]
+            };
+            let next: [f64; 2] = std::array::from_fn(|j| if j < k { (uv[j] + step[j]).clamp(range[0][j].min(range[1][j]), range[0][j].max(range[1][j])) } else { 0.0 });
+            if !edge && (0..k).any(|j| next[j] != uv[j] + step[j]) {
+                return Ok(None);
+            }
+            let moved = (0..k).map(|j| (next[j] - uv[j]).abs() * norm(d[j])).fold(0.0, f64::max);
+            uv = next;
+            x = s.value(self.dim, self.tag, &uv[..k])?;
+            if moved <= 1e-15 * (1.0 + norm(p)) {
+                let d = tangents(&s.derivative(self.dim, self.tag, &uv[..k])?, k);
+                return Ok(Some(Foot { x: [x[0], x[1], x[2]], uv, d }));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The unit normal of the surface at `foot`: ∂u × ∂v turned as Gmsh's
+    /// (`sign`), or Gmsh's own where the parametrisation degenerates (a
+    /// sphere's pole).
+    fn surface_normal(&self, s: &gmsh::Session, foot: &Foot, sign: f64) -> Result<[f64; 3], CadError> {
+        let c = cross3(foot.d[0], foot.d[1]);
+        if norm(c) > 1e-12 * dot(foot.d[0], foot.d[0]).max(dot(foot.d[1], foot.d[1])) {
+            return Ok(unit(c).map(|v| sign * v));
+        }
+        let n = s.normal(self.tag, &foot.uv)?;
+        Ok([n[0], n[1], n[2]])
+    }
 }
 
-impl CadShape {
-    /// Gmsh's foot `found` (point, parameters) of `p`, refined where its
-    /// parameters are at the edge of `range` (see the module docs).
-    fn at_range_edge(&self, s: &gmsh::Session, p: [f64; 3], found: ([f64; 3], [f64; 2]), range: [[f64; 2]; 2]) -> Result<([f64; 3], [f64; 2]), CadError> {
-        let k = self.dim as usize;
-        let [lo, hi] = range;
-        let edge = (0..k).any(|j| {
-            let w = 1e-6 * (hi[j] - lo[j]).abs();
-            found.1[j] - lo[j] <= w || hi[j] - found.1[j] <= w
-        });
-        if !edge {
-            return Ok(found);
-        }
-        let (mut q, mut uv) = found;
-        if k == 1 {
-            // Gmsh answers a curve's end point with parameter 0 whichever
-            // end it is: try both ends
-            for end in [lo[0], hi[0]] {
-                let x = s.value(1, self.tag, &[end])?;
-                let e = [x[0], x[1], x[2]];
-                if norm(sub(p, e)) < norm(sub(p, q)) {
-                    (q, uv) = (e, [end, 0.0]);
-                }
-            }
-        }
-        for _ in 0..4 {
-            let d = s.derivative(self.dim, self.tag, &uv[..k])?;
-            let t: Vec<[f64; 3]> = (0..k).map(|j| [d[3 * j], d[3 * j + 1], d[3 * j + 2]]).collect();
-            let r = sub(p, q);
-            // a diagonal step per parameter: clamped at the edge, the
-            // other one alone moves
-            let mut next = uv;
-            for j in 0..k {
-                let m = dot(t[j], t[j]);
-                if m > 0.0 {
-                    next[j] = (uv[j] + dot(t[j], r) / m).clamp(lo[j].min(hi[j]), hi[j].max(lo[j]));
-                }
-            }
-            let x = s.value(self.dim, self.tag, &next[..k])?;
-            let nq = [x[0], x[1], x[2]];
-            if !(norm(sub(p, nq)) < norm(r)) {
-                break;
-            }
-            (q, uv) = (nq, next);
-        }
-        Ok((q, uv))
-    }
+/// Gmsh's first derivatives (x_u, then x_v for a surface) as vectors.
+fn tangents(d: &[f64], k: usize) -> [[f64; 3]; 2] {
+    std::array::from_fn(|j| if j < k && d.len() >= 3 * j + 3 { [d[3 * j], d[3 * j + 1], d[3 * j + 2]] } else { [0.0; 3] })
 }
 
 /// A unit normal of a curve with tangent `t` towards the offset `d` of a
