@@ -50,6 +50,7 @@ enum Command {
     /// CAD model it was meshed from, or a geometry file), run Algorithms 2
     /// and 3, write OUT.msh (with OUT.vtu, OUT.png, OUT.report.json beside
     /// it) if every element is certified valid.
+    #[command(group(clap::ArgGroup::new("binding").required(true).multiple(true).args(["cad", "geometry"])))]
     Curve {
         /// The linear triangle, quad, tetrahedral or hex mesh (Gmsh MSH 4.1, ASCII or binary, or MSH 2.2).
         mesh: PathBuf,
@@ -58,7 +59,7 @@ enum Command {
         /// model's entity with its tag. Loads Gmsh's library (GPL-2+) at
         /// run time: DEFORMESH_GMSH_LIB, else the Python `gmsh` package
         /// (`pip install gmsh`), else the system's.
-        #[arg(long, required_unless_present = "geometry")]
+        #[arg(long)]
         cad: Option<PathBuf>,
         /// The geometry file (TOML `[[group]]` tables: name, kind, shape);
         /// with --cad it may set groups to `slip` or `fixed`, or give them

@@ -979,24 +979,23 @@ impl<const D: usize> RefineBoundary<D> {
                 // the image is Γ_t at t = 1
                 norm(self.precise_tangent(c, q, k))
             };
-            // composite 5-point Gauss–Legendre on 4 pieces of [0, x]
-            let length = |x: f64| {
-                (0..4)
-                    .map(|piece| {
-                        let (a, h) = (x * piece as f64 / 4.0, x / 4.0);
-                        GL5.iter().map(|&(xi, w)| w * h * speed(a + xi * h)).sum::<f64>()
-                    })
-                    .sum::<f64>()
-            };
+            // 5-point Gauss–Legendre on [a, b]
+            let piece = |a: f64, b: f64| GL5.iter().map(|&(xi, w)| w * (b - a) * speed(a + xi * (b - a))).sum::<f64>();
+            // composite on 4 pieces of [0, x]
+            let length = |x: f64| (0..4).map(|j| piece(x * j as f64 / 4.0, x * (j + 1) as f64 / 4.0)).sum::<f64>();
             let goal = s[k] * length(1.0);
-            // Newton on the arc length, kept inside [0, 1]
-            let mut x = s[k];
+            // Newton on the arc length, kept inside [0, 1]; the length at x
+            // is the start's and the short stretch from s to x (one piece:
+            // a quarter of the images a whole new length would take)
+            let before = length(s[k]);
+            let (mut x, mut at) = (s[k], before);
             for _ in 0..30 {
-                let step = (length(x) - goal) / speed(x).max(f64::MIN_POSITIVE);
+                let step = (at - goal) / speed(x).max(f64::MIN_POSITIVE);
                 x = (x - step).clamp(0.0, 1.0);
                 if step.abs() < 1e-14 {
                     break;
                 }
+                at = before + piece(s[k], x);
             }
             out[k] = x;
         }

@@ -40,6 +40,7 @@ struct Api {
     get_value: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_bounding_box: unsafe extern "C" fn(c_int, c_int, *mut f64, *mut f64, *mut f64, *mut f64, *mut f64, *mut f64, ErrPtr),
+    get_parametrization: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_second_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_normal: unsafe extern "C" fn(c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_parametrization_bounds: unsafe extern "C" fn(c_int, c_int, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
@@ -153,6 +154,7 @@ impl Session {
                 get_value: symbol(&lib, &path, "gmshModelGetValue")?,
                 get_derivative: symbol(&lib, &path, "gmshModelGetDerivative")?,
                 get_bounding_box: symbol(&lib, &path, "gmshModelGetBoundingBox")?,
+                get_parametrization: symbol(&lib, &path, "gmshModelGetParametrization")?,
                 get_second_derivative: symbol(&lib, &path, "gmshModelGetSecondDerivative")?,
                 get_normal: symbol(&lib, &path, "gmshModelGetNormal")?,
                 get_parametrization_bounds: symbol(&lib, &path, "gmshModelGetParametrizationBounds")?,
@@ -304,6 +306,14 @@ impl Session {
         unsafe { (self.api.get_bounding_box)(dim, tag, x0, y0, z0, x1, y1, z1, &mut ierr) };
         self.check(ierr, "gmshModelGetBoundingBox")?;
         Ok(b)
+    }
+
+    /// The parameters of `points` (x, y, z each) on (dim, tag).
+    pub fn parametrization(&self, dim: i32, tag: i32, points: &[f64]) -> Result<Vec<f64>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { (self.api.get_parametrization)(dim, tag, points.as_ptr(), points.len(), &mut p, &mut n, &mut ierr) };
+        self.check(ierr, "gmshModelGetParametrization")?;
+        Ok(self.take(p, n))
     }
 
     /// The second derivatives of (dim, tag) at `uv`: per point, x_tt (a

@@ -287,8 +287,8 @@ impl CadShape {
     }
 
     /// Gmsh's projection of `p`, polished by Newton's method (its own is
-    /// only about 1e-9 of the model's size close, and at the edge of a
-    /// curve's range it answers parameter 0 whichever end is nearer).
+    /// only about 1e-9 of the model's size close; on curves its parameter
+    /// is mostly 0, and at a curve's end it may answer the other end).
     fn from_gmsh(&self, s: &gmsh::Session, p: [f64; 3], range: [[f64; 2]; 2]) -> Result<Foot, CadError> {
         let (x, uv) = s.closest(self.dim, self.tag, &p)?;
         let k = self.dim as usize;
@@ -297,6 +297,10 @@ impl CadShape {
         }
         let mut start = ([x[0], x[1], x[2]], [uv[0], if k == 2 { uv[1] } else { 0.0 }]);
         if k == 1 {
+            // Gmsh 4.15 answers most curve feet with parameter 0 (the
+            // point itself is right): ask for the foot's parameter
+            let t = s.parametrization(1, self.tag, &start.0)?;
+            start.1[0] = t.first().copied().unwrap_or(start.1[0]);
             for end in [range[0][0], range[1][0]] {
                 let e = s.value(1, self.tag, &[end])?;
                 let e = [e[0], e[1], e[2]];
@@ -351,7 +355,9 @@ impl CadShape {
             let moved = (0..k).map(|j| (next[j] - uv[j]).abs() * norm(d[j])).fold(0.0, f64::max);
             uv = next;
             x = s.value(self.dim, self.tag, &uv[..k])?;
-            if moved <= 1e-15 * (1.0 + norm(p)) {
+            // converging quadratically: after a step this short the foot
+            // is at round-off (a tighter test would wait on round-off noise)
+            if moved <= 1e-10 * (1.0 + norm(p)) {
                 let d = tangents(&s.derivative(self.dim, self.tag, &uv[..k])?, k);
                 return Ok(Some(Foot { x: [x[0], x[1], x[2]], uv, d }));
             }
