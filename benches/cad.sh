@@ -13,13 +13,18 @@
 #   DEFORMESH  binary (default target/release/deformesh)
 #   PYTHON     Python with gmsh (default .venv/bin/python)
 #   CASES      space-separated subset of the case names below
+#   LIMIT      seconds each Gmsh run may take (default 300)
 #
 # naca2d_full is the issue's size: a 2e-4 first layer, 27,776 quads (the issue: 28,406).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEAT=${1:-3}
+LIMIT=${LIMIT:-300}
 DEFORMESH=${DEFORMESH:-target/release/deformesh}
 PYTHON=${PYTHON:-.venv/bin/python}
+# the Gmsh library of that Python's gmsh package, unless named
+DEFORMESH_GMSH_LIB=${DEFORMESH_GMSH_LIB:-$("$PYTHON" -c 'import gmsh; print(gmsh.libpath)')}
+export DEFORMESH_GMSH_LIB
 OUT=target/cad-bench
 mkdir -p "$OUT"
 median() { sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
@@ -40,17 +45,27 @@ for c in "${ALL[@]}"; do
     model="$dir/$kind.step"
     [[ "$kind" == wing ]] && model="$dir/$kind.brep"
     for p in 2 3; do
-        for r in $(seq "$REPEAT"); do
-            # shellcheck disable=SC2086
-            "$PYTHON" tests/python/cad_models.py "$kind" "$dir" $args --peers "$p" --methods setorder,fastcurving,elastic >"$dir/peers_p${p}_$r.json"
-        done
         for m in setorder fastcurving elastic; do
-            t=$(for r in $(seq "$REPEAT"); do "$PYTHON" -c "import json; print(json.load(open('$dir/peers_p${p}_$r.json'))['$m']['seconds'])"; done | median)
-            "$PYTHON" - "$dir/peers_p${p}_1.json" "$m" "$name" "$p" "$t" <<'EOF'
-import json, sys
-j = json.load(open(sys.argv[1]))[sys.argv[2]]
-label = {"setorder": "Gmsh setOrder", "fastcurving": "Gmsh FastCurving", "elastic": "Gmsh Elastic"}[sys.argv[2]]
-print(f"| {sys.argv[3]} | {sys.argv[4]} | {label} | {j['elements']} | {j['invalid']} | {j['min_sj']:.3f} | {j['boundary_sample_distance']:.2e} | {float(sys.argv[5]):.3f} |")
+            for r in $(seq "$REPEAT"); do
+                # one method a process, each given LIMIT seconds
+                # shellcheck disable=SC2086
+                timeout "$LIMIT" "$PYTHON" tests/python/cad_models.py "$kind" "$dir" $args --peers "$p" --methods "$m" >"$dir/peers_${m}_p${p}_$r.json" || : >"$dir/peers_${m}_p${p}_$r.json"
+            done
+            "$PYTHON" - "$dir" "$m" "$name" "$p" "$REPEAT" "$LIMIT" <<'EOF'
+import json, statistics, sys
+d, m, name, p, repeat, limit = sys.argv[1:]
+runs = []
+for r in range(1, int(repeat) + 1):
+    text = open(f"{d}/peers_{m}_p{p}_{r}.json").read().strip()
+    if text:
+        runs.append(json.loads(text)[m])
+label = {"setorder": "Gmsh setOrder", "fastcurving": "Gmsh FastCurving", "elastic": "Gmsh Elastic"}[m]
+if not runs:
+    print(f"| {name} | {p} | {label} | did not finish in {limit} s | | | | |")
+else:
+    j = runs[0]
+    t = statistics.median_low([x["seconds"] for x in runs])
+    print(f"| {name} | {p} | {label} | {j['elements']} | {j['invalid']} | {j['min_sj']:.3f} | {j['boundary_sample_distance']:.2e} | {t:.3f} |")
 EOF
         done
         ok=1

@@ -113,45 +113,40 @@ fn setorder(peers: &Option<Value>) -> (u64, f64) {
 
 #[test]
 fn a_naca_section_with_a_boundary_layer_is_curved_onto_its_step() {
+    curved_at_p2_p3("naca2d", |_, _| {});
+}
+
+/// `kind` of cad_models.py curved with `--cad` at p = 2 and 3, each
+/// judged by [`on_its_cad`] and then by `more` (Gmsh's figures, p).
+fn curved_at_p2_p3(kind: &str, more: impl Fn(&Value, usize)) {
     let dir = tempfile::tempdir().unwrap();
     for p in [2, 3] {
-        let (mesh, step, peers) = model(dir.path(), "naca2d", &["--peers", &p.to_string()]);
+        let (mesh, model_file, peers) = model(dir.path(), kind, &["--peers", &p.to_string()]);
         let (invalid, peer) = setorder(&peers);
-        let (r, out) = curve_cad(dir.path(), &mesh, Some(&step), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
-        on_its_cad(&step, &out, &r, peer);
-        assert_eq!(r.cad.as_ref().unwrap().gmsh_version.split('.').next(), Some("4"));
-        eprintln!("naca2d p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder: {invalid} invalid, {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
+        let (r, out) = curve_cad(dir.path(), &mesh, Some(&model_file), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
+        more(&on_its_cad(&model_file, &out, &r, peer), p);
+        let cad = r.cad.as_ref().expect("the report names the model");
+        assert!(cad.model.ends_with(model_file.file_name().unwrap().to_str().unwrap()) && cad.gmsh_version.starts_with("4."), "{cad:?}");
+        eprintln!("{kind} p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder: {invalid} invalid, {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
     }
+}
+
+/// How many nodes Gmsh finds on the model's curves (entities of dimension 1).
+fn nodes_on_curves(g: &Value) -> u64 {
+    g["entities"].as_array().unwrap().iter().filter(|e| e["dim"] == 1).map(|e| e["nodes"].as_u64().unwrap()).sum()
 }
 
 #[test]
 fn a_filleted_box_of_tetrahedra_is_curved_onto_its_faces_and_their_edges() {
-    let dir = tempfile::tempdir().unwrap();
-    for p in [2, 3] {
-        let (mesh, step, peers) = model(dir.path(), "fillet_box", &["--peers", &p.to_string()]);
-        let (_, peer) = setorder(&peers);
-        let (r, out) = curve_cad(dir.path(), &mesh, Some(&step), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
-        let g = on_its_cad(&step, &out, &r, peer);
-        // nodes on the curves where the faces meet were judged
-        assert!(g["entities"].as_array().unwrap().iter().any(|e| e["dim"] == 1 && e["nodes"].as_u64().unwrap() > 0), "{}", g["entities"]);
-        eprintln!("fillet_box p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
-    }
+    // nodes on the curves where the faces meet were judged
+    curved_at_p2_p3("fillet_box", |g, _| assert!(nodes_on_curves(g) > 0, "{}", g["entities"]));
 }
 
 #[test]
 fn an_extruded_naca_wing_of_hexahedra_is_curved_onto_its_step() {
-    let dir = tempfile::tempdir().unwrap();
-    for p in [2, 3] {
-        let (mesh, brep, peers) = model(dir.path(), "wing", &["--peers", &p.to_string()]);
-        let (_, peer) = setorder(&peers);
-        let (r, out) = curve_cad(dir.path(), &mesh, Some(&brep), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
-        let g = on_its_cad(&brep, &out, &r, peer);
-        // the file saves no line elements (groups on surfaces only): the
-        // new nodes along the wing's edges are put on their curves
-        let on_curves: u64 = g["entities"].as_array().unwrap().iter().filter(|e| e["dim"] == 1).map(|e| e["nodes"].as_u64().unwrap()).sum();
-        assert!(on_curves >= 40 * (p as u64 - 1), "{on_curves} nodes on curves: {}", g["entities"]);
-        eprintln!("wing p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
-    }
+    // the file saves no line elements (groups on surfaces only): the new
+    // nodes along the wing's edges are put on their curves all the same
+    curved_at_p2_p3("wing", |g, p| assert!(nodes_on_curves(g) >= 40 * (p as u64 - 1), "{}", g["entities"]));
 }
 
 #[test]

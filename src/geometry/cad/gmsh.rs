@@ -24,6 +24,10 @@ pub const OLDEST: (u32, u32) = (4, 11);
 
 type ErrPtr = *mut c_int;
 
+/// The shape of Gmsh's evaluations of an entity: (dim, tag, inputs) →
+/// an array Gmsh allocates (`GetValue`, `GetDerivative`, …).
+type EvalFn = unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr);
+
 /// The entry points of `libgmsh` the method calls, with their C types.
 struct Api {
     free: unsafe extern "C" fn(*mut c_void),
@@ -37,11 +41,11 @@ struct Api {
     get_type: unsafe extern "C" fn(c_int, c_int, *mut *mut c_char, ErrPtr),
     get_boundary: unsafe extern "C" fn(*const c_int, usize, *mut *mut c_int, *mut usize, c_int, c_int, c_int, ErrPtr),
     closest_point: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
-    get_value: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
-    get_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_value: EvalFn,
+    get_derivative: EvalFn,
     get_bounding_box: unsafe extern "C" fn(c_int, c_int, *mut f64, *mut f64, *mut f64, *mut f64, *mut f64, *mut f64, ErrPtr),
-    get_parametrization: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
-    get_second_derivative: unsafe extern "C" fn(c_int, c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
+    get_parametrization: EvalFn,
+    get_second_derivative: EvalFn,
     get_normal: unsafe extern "C" fn(c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_parametrization_bounds: unsafe extern "C" fn(c_int, c_int, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
     last_error: unsafe extern "C" fn(*mut *mut c_char, ErrPtr),
@@ -279,22 +283,24 @@ impl Session {
         Ok((self.take(xp, xn), self.take(up, un)))
     }
 
+    /// Gmsh's evaluation `f` (named `call`) of entity (dim, tag) at `input`.
+    fn evaluate(&self, f: EvalFn, call: &str, (dim, tag): (i32, i32), input: &[f64]) -> Result<Vec<f64>, CadError> {
+        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
+        unsafe { f(dim, tag, input.as_ptr(), input.len(), &mut p, &mut n, &mut ierr) };
+        self.check(ierr, call)?;
+        Ok(self.take(p, n))
+    }
+
     /// The points of (dim, tag) at parameters `uv` (for a point entity:
     /// its coordinates).
     pub fn value(&self, dim: i32, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
-        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
-        unsafe { (self.api.get_value)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
-        self.check(ierr, "gmshModelGetValue")?;
-        Ok(self.take(p, n))
+        self.evaluate(self.api.get_value, "gmshModelGetValue", (dim, tag), uv)
     }
 
     /// The first derivatives of (dim, tag) at `uv`: per point, x_t (a
     /// curve) or x_u then x_v (a surface).
     pub fn derivative(&self, dim: i32, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
-        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
-        unsafe { (self.api.get_derivative)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
-        self.check(ierr, "gmshModelGetDerivative")?;
-        Ok(self.take(p, n))
+        self.evaluate(self.api.get_derivative, "gmshModelGetDerivative", (dim, tag), uv)
     }
 
     /// The bounding box `[min, max]` of (dim, tag).
@@ -310,19 +316,13 @@ impl Session {
 
     /// The parameters of `points` (x, y, z each) on (dim, tag).
     pub fn parametrization(&self, dim: i32, tag: i32, points: &[f64]) -> Result<Vec<f64>, CadError> {
-        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
-        unsafe { (self.api.get_parametrization)(dim, tag, points.as_ptr(), points.len(), &mut p, &mut n, &mut ierr) };
-        self.check(ierr, "gmshModelGetParametrization")?;
-        Ok(self.take(p, n))
+        self.evaluate(self.api.get_parametrization, "gmshModelGetParametrization", (dim, tag), points)
     }
 
     /// The second derivatives of (dim, tag) at `uv`: per point, x_tt (a
     /// curve) or x_uu, x_vv, x_uv (a surface).
     pub fn second_derivative(&self, dim: i32, tag: i32, uv: &[f64]) -> Result<Vec<f64>, CadError> {
-        let (mut p, mut n, mut ierr) = (std::ptr::null_mut(), 0usize, 0);
-        unsafe { (self.api.get_second_derivative)(dim, tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
-        self.check(ierr, "gmshModelGetSecondDerivative")?;
-        Ok(self.take(p, n))
+        self.evaluate(self.api.get_second_derivative, "gmshModelGetSecondDerivative", (dim, tag), uv)
     }
 
     /// The parameter ranges `(min, max)` of (dim, tag), one per parameter.
