@@ -165,6 +165,13 @@ fn a_step_circle_and_the_exact_circle_curve_a_mesh_alike() {
         assert!(rel(a.quality.min_det_j, b.quality.min_det_j) < 1e-9, "p = {p}: min det J {} against {}", a.quality.min_det_j, b.quality.min_det_j);
         assert!(rel(a.quality.boundary_sample_distance, b.quality.boundary_sample_distance) < 1e-6, "p = {p}: {} against {}", a.quality.boundary_sample_distance, b.quality.boundary_sample_distance);
     }
+    // a geometry file given with --cad overrides the groups it names: the
+    // circle held fixed is no curved part, and a side of the square slips
+    let held = "[[group]]\nname = \"curve5\"\nkind = \"fixed\"\n[[group]]\nname = \"curve1\"\nkind = \"slip\"\n";
+    let (c, _) = curve_cad(dir.path(), &mesh, Some(&step), Some(held), 2).unwrap();
+    assert!(c.quality.boundary_error.is_empty(), "{:?}", c.quality.boundary_error);
+    let (a, _) = curve_cad(dir.path(), &mesh, Some(&step), None, 2).unwrap();
+    assert_eq!(a.quality.boundary_error.keys().collect::<Vec<_>>(), ["curve 5"]);
 }
 
 #[test]
