@@ -15,7 +15,8 @@
 #   CASES      space-separated subset of the case names below
 #   LIMIT      seconds each Gmsh run may take (default 300)
 #
-# naca2d_full is the issue's size: a 2e-4 first layer, 27,776 quads (the issue: 28,406).
+# naca2d_full is the issue's size: a 2e-4 first layer, 27,776 quads (the issue: 28,406);
+# wing_full 2,024 hexes (the issue: 2,112).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEAT=${1:-3}
@@ -35,6 +36,7 @@ ALL=(
   "naca2d_full naca2d --first 2e-4 --size 0.003 --far 0.09"
   "fillet_box fillet_box"
   "wing wing"
+  "wing_full wing --size 0.05"
 )
 printf '| mesh | p | tool | elements | invalid | min SJ | boundary error | time (s) |\n|---|---|---|---|---|---|---|---|\n'
 for c in "${ALL[@]}"; do
