@@ -9,21 +9,19 @@
 //! plane; in 3D, where two surfaces meet) or a surface. Every call goes
 //! through the session's lock: Gmsh is not thread safe.
 //!
-//! Projections are Gmsh's `gmshModelGetClosestPoint`, 15 µs a call on a
-//! cylinder and 70 µs on a B-spline face, most of it the call itself
-//! (its parametrisation, `GetValue` with `GetDerivative`, costs 17 µs a
-//! call too, so a Newton iteration of our own saves nothing). Algorithm
-//! 2 asks for the same points again (a node's tangent stencil at the
-//! start of a step, and its first Gauss–Newton iterate): each shape
+//! A foot is found by Newton's method on |S(u, v) − p|² in the entity's
+//! parameters (`CadShape::newton`: Gmsh's `GetValue`, `GetDerivative`,
+//! `GetSecondDerivative`, a few µs each), started from the parameters of
+//! a foot found for a query in the same seed cell (`SEED_CELL`). Gmsh's
+//! `gmshModelGetClosestPoint` (11 µs a call on a B-spline curve, 70 µs on
+//! a B-spline face) is the fallback where there is no seed or Newton
+//! fails, and its answer is polished by the same Newton: on its own it is
+//! only about 1e-9 of the model's size close, on curves Gmsh 4.15 answers
+//! parameter 0 for most feet (the parameter is asked of
+//! `GetParametrization`), and at a curve's end it may answer the other
+//! end (both ends are tried). Algorithm 2 asks for the same points again
+//! (a node's tangent stencil, its first Gauss–Newton iterate): each shape
 //! remembers its answers, exactly, up to [`MEMO_SIZE`] points.
-//!
-//! Gmsh's projection of a point at the edge of an entity's parameter
-//! range (a curve's end point) is only about 1e-8 of the model's size
-//! off (measured on a B-spline airfoil's leading- and trailing-edge
-//! points: 1.04e-8, 1.02e-8, both answered with parameter 0): there a
-//! curve's end points are tried, and the foot is refined by Gauss–Newton
-//! steps with the parameters clamped to the range, kept where they come
-//! closer.
 //!
 //! A query that Gmsh fails cannot return an error through the trait: the
 //! shape answers with the point itself and the model keeps the first such
