@@ -474,7 +474,8 @@ fn settling_line(s: &deformesh::highorder::curve::Settling, dirichlet: bool) -> 
             } else {
                 format!("; {} element(s) (0-based) kept nearer their sliding places to stay valid: {:?}", s.demoted_elements.len(), s.demoted_elements)
             };
-            format!("settling: new boundary nodes put at their places along the arcs ({}, largest move {:.2e}){demoted}", how.unwrap_or("-"), s.largest_move)
+            let places = if s.fitted { "fitted places" } else { "places at equal arc length (the fitted ones cost a cell its shape)" };
+            format!("settling: new boundary nodes put at their {places} along the arcs ({}, largest move {:.2e}){demoted}", how.unwrap_or("-"), s.largest_move)
         }
     }
 }

@@ -33,7 +33,7 @@ use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, PlaneCell
 use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// A coarse Q1 mesh that can be subdivided: its boundary facets (edges in
 /// 2D, faces in 3D) and how a fine mesh of the same kind is put together.
@@ -708,6 +708,10 @@ const GL5: [(f64, f64); 5] = [
 /// ([`RefineMesh::settling`]), in the order they are tried.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Settle {
+    /// At the place along the image that, with the other new nodes of its
+    /// line, brings the edge's polynomial closest to the shape
+    /// ([`crate::geometry::fit`]), else as `Arc`.
+    Fit,
     /// At the fraction of the image's arc length its place asks for.
     Arc,
     /// At the image X(P₀(s)) of its place on the flat facet (the target of
@@ -722,9 +726,54 @@ impl Settle {
     /// The next placement to try when this one left an element invalid.
     pub fn next(self) -> Settle {
         match self {
+            Settle::Fit => Settle::Arc,
             Settle::Arc => Settle::Image,
             _ => Settle::Keep,
         }
+    }
+}
+
+/// A line of new nodes on a carrier ([`RefineBoundary::fitted_lines`]):
+/// the carrier, the direction along it, and the other coordinate's bits.
+type LineKey = (usize, usize, u64);
+
+fn line_key(carrier: usize, s: [f64; 2], d: usize) -> LineKey {
+    (carrier, d, if d == 0 { s[1] } else { s[0] }.to_bits())
+}
+
+/// A line's new nodes: their reference places, increasing, and the
+/// carrier parameters they settle at.
+#[derive(Debug)]
+struct Line {
+    reference: Vec<f64>,
+    places: Vec<f64>,
+}
+
+impl Line {
+    /// The parameter of the node at reference place `r`.
+    fn place(&self, r: f64) -> f64 {
+        let j = self.reference.iter().position(|&x| x == r).expect("every fitted node is on its line");
+        self.places[j]
+    }
+}
+
+/// The fitted lines of a settling, by line.
+type Fits = HashMap<LineKey, Line>;
+
+/// Where the settling pass puts each fine node ([`Settle`]), and the
+/// fitted lines, found once for all of the pass's tries (they depend on
+/// the lines, not on which of their nodes are fitted).
+#[derive(Clone, Debug)]
+pub struct SettlePlan {
+    /// Per fine node.
+    pub places: Vec<Settle>,
+    fits: Arc<OnceLock<Fits>>,
+}
+
+impl SettlePlan {
+    /// Every one of `nodes` fine nodes at its fitted place.
+    pub fn new(nodes: usize) -> Self {
+        SettlePlan { places: vec![Settle::Fit; nodes], fits: Arc::default() }
     }
 }
 
@@ -802,7 +851,7 @@ pub struct RefineMesh<M, const D: usize> {
     on_facets: HashMap<usize, Vec<(usize, [f64; 2])>>,
     /// Settling: per node, where a new node of a curved carrier goes
     /// (see [`RefineMesh::settling`]).
-    settle: Option<Vec<Settle>>,
+    settle: Option<SettlePlan>,
     /// Per node, whether it may move ([`Subdivision::band`]); None: all.
     band: Option<Vec<bool>>,
 }
@@ -912,7 +961,9 @@ fn frame_with<const D: usize>(n: [f64; D]) -> [[f64; D]; D] {
 impl<const D: usize> RefineBoundary<D> {
     /// Settling (see [`RefineMesh::settling`]): a sliding node of a curved
     /// carrier becomes a path node aimed at the image of its place.
-    fn settle_roles(&mut self, plan: &[Settle]) -> Result<(), DeformError> {
+    fn settle_roles(&mut self, plan: &SettlePlan) -> Result<(), DeformError> {
+        let fits = plan.fits.get_or_init(|| self.fitted_lines());
+        let plan = &plan.places;
         for i in 0..self.roles.len() {
             let Role2::Slide { carrier, s } = self.roles[i] else { continue };
             let car = &self.carriers[carrier];
@@ -920,7 +971,8 @@ impl<const D: usize> RefineBoundary<D> {
             let place = match plan[i] {
                 // a triangle's iso-lines end on its hypotenuse, not at 1:
                 // its nodes go to the images of their flat places
-                Settle::Arc if car.corners.len() == 3 => s,
+                Settle::Fit | Settle::Arc if car.corners.len() == 3 => s,
+                Settle::Fit => std::array::from_fn(|d| if d < car.dims() { fits[&line_key(carrier, s, d)].place(s[d]) } else { s[d] }),
                 Settle::Arc => self.arc_parameter(carrier, s),
                 Settle::Image => s,
                 Settle::Keep => {
@@ -971,8 +1023,12 @@ impl<const D: usize> RefineBoundary<D> {
     /// interpolant a constant factor (measured on a circle arc of 0.2 rad:
     /// 3.7e-6 against 4.1e-7 at p = 3, 3.0e-9 against 3.3e-10 at p = 4).
     fn arc_parameter(&self, c: usize, s: [f64; 2]) -> [f64; 2] {
-        let mut out = s;
-        for k in 0..self.carriers[c].dims() {
+        std::array::from_fn(|k| if k < self.carriers[c].dims() { self.arc_place(c, s, k) } else { s[k] })
+    }
+
+    /// The `k`-th coordinate of [`Self::arc_parameter`].
+    fn arc_place(&self, c: usize, s: [f64; 2], k: usize) -> f64 {
+        {
             let speed = |x: f64| {
                 let mut q = s;
                 q[k] = x;
@@ -997,9 +1053,58 @@ impl<const D: usize> RefineBoundary<D> {
                 }
                 at = before + piece(s[k], x);
             }
-            out[k] = x;
+            x
         }
-        out
+    }
+
+    /// The fitted places ([`Settle::Fit`]) of every line of new nodes of
+    /// a curved carrier: per line (carrier, direction, the other
+    /// coordinate), each node's reference place and its parameter.
+    fn fitted_lines(&self) -> Fits {
+        use rayon::prelude::*;
+        let t0 = std::time::Instant::now();
+        let mut lines: HashMap<LineKey, Vec<f64>> = HashMap::new();
+        for role in &self.roles {
+            let Role2::Slide { carrier, s } = *role else { continue };
+            let car = &self.carriers[carrier];
+            if car.part.is_none() || car.corners.len() == 3 {
+                continue;
+            }
+            for d in 0..car.dims() {
+                let line = lines.entry(line_key(carrier, s, d)).or_default();
+                if !line.contains(&s[d]) {
+                    line.push(s[d]);
+                }
+            }
+        }
+        let lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
+        let count = lines.len();
+        let fits: Fits = lines.into_par_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
+        tracing::info!("settling: {count} lines of new nodes fitted in {:.2} s", t0.elapsed().as_secs_f64());
+        fits
+    }
+
+    /// One line's fit, from its nodes' reference places (inner nodes of
+    /// the line, any order): equal arc length where the fit gains nothing.
+    fn fit_line(&self, (c, d, other): LineKey, mut reference: Vec<f64>) -> Line {
+        reference.sort_by(f64::total_cmp);
+        let base = |x: f64| {
+            let mut q = [0.0; 2];
+            q[d] = x;
+            q[1 - d] = f64::from_bits(other);
+            q
+        };
+        let start: Vec<f64> = reference.iter().map(|&r| self.arc_place(c, base(r), d)).collect();
+        let car = &self.carriers[c];
+        let shape = car.curve.clone().or_else(|| match &self.parts[car.part?].kind {
+            PartKind::Move { target, .. } => Some(target.clone()),
+            _ => None,
+        });
+        let fitted = shape.and_then(|shape| {
+            let ends: Vec<f64> = std::iter::once(0.0).chain(reference.iter().copied()).chain(std::iter::once(1.0)).collect();
+            crate::geometry::fit::fitted_places(|x| self.carrier_point(c, base(x), 1.0).0, |q| shape.closest_point(q), &ends, &start)
+        });
+        Line { reference, places: fitted.unwrap_or(start) }
     }
 
     /// The image X(p) of carrier `c`'s starting point p: on its curve, or
@@ -1249,7 +1354,7 @@ impl<M, const D: usize> RefineMesh<M, D> {
     /// than the drift is moved as a block rather than sheared.
     ///
     /// `plan` says, per fine node, where it goes ([`Settle`]).
-    pub fn settling<const N: usize>(mut self, nodes: &[[f64; D]], plan: Vec<Settle>) -> Self
+    pub fn settling<const N: usize>(mut self, nodes: &[[f64; D]], plan: SettlePlan) -> Self
     where
         M: Q1Mesh<D, N>,
     {

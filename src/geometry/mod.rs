@@ -25,6 +25,7 @@
 pub mod cad;
 mod curve;
 mod ellipse;
+pub mod fit;
 mod flat;
 mod level_set;
 mod parametric;

@@ -149,6 +149,24 @@ fn an_extruded_naca_wing_of_hexahedra_is_curved_onto_its_step() {
     curved_at_p2_p3("wing", |g, p| assert!(nodes_on_curves(g) >= 40 * (p as u64 - 1), "{}", g["entities"]));
 }
 
+/// The wing at the size (2,024 hexes) at p = 3: the nose element
+/// spans the leading edge's changing curvature, where equal arc length
+/// left 1.95e-4 against setOrder's 8.5e-5; the fitted places leave 1.4e-6
+/// (measured, and Gmsh's measure of it agrees).
+#[test]
+fn the_full_wing_at_p3_fits_its_nose_closer_than_gmsh() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, model_file, peers) = model(dir.path(), "wing", &["--size", "0.05", "--peers", "3"]);
+    let (_, peer) = setorder(&peers);
+    let (r, out) = curve_cad(dir.path(), &mesh, Some(&model_file), None, 3).unwrap();
+    assert_eq!(r.cells, 2024);
+    assert!(r.quality.settling.fitted, "{:?}", r.quality.settling);
+    on_its_cad(&model_file, &out, &r, peer);
+    let ours = r.quality.boundary_sample_distance;
+    assert!(ours < 2e-6 && ours < peer / 40.0, "boundary error {ours:e}, Gmsh setOrder's {peer:e}");
+    eprintln!("wing 2,024 hexes p = 3: min SJ {:.3}, boundary {ours:.3e} (Gmsh setOrder {peer:.3e}), {:.2} s", r.quality.scaled_jacobian.min, r.total_s);
+}
+
 #[test]
 fn a_step_circle_and_the_exact_circle_curve_a_mesh_alike() {
     let dir = tempfile::tempdir().unwrap();

@@ -109,8 +109,11 @@ pub fn gmsh_agrees_within<const D: usize>(file: &Path, ty: i64, count: usize, sh
         assert!(*g > 0.0, "Gmsh finds element {k} invalid: minDetJac {g}");
         let (lo, hi) = (scale * o.min_det_lower, scale * o.max_det);
         // both are lower bounds from Bézier coefficients; ours is refined
-        // until it is within 1e-7 of a value det J takes
-        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
+        // until it is within 1e-7 of a value det J takes. Round-off: at a
+        // straight-angle corner det J is a difference of products the
+        // size of max det J (measured: Gmsh's 2.5e-16 above an attained
+        // 3.9e-10, the quarter disk's corner cell at p = 3)
+        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9) + 1e-12 * hi, "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
         if lo / hi >= 0.05 {
             a.shaped = a.shaped.max((g - lo).abs() / lo);
             assert!(o.min_scaled_jacobian > 0.0);

@@ -505,11 +505,11 @@ fn a_hex_boundary_layer_around_a_sphere_stays_valid_at_p2_and_p3() {
         // larger thin cells. Its minDetJac, also a looser lower bound, is
         // up to 3.4e-3 under ours on the thinnest p = 2 elements
         let a = common::gmsh_agrees_within::<3>(&j.output, [12, 92][p - 2], cells, 5e-3);
-        assert_eq!(a.sj_not_positive, 0, "{a:?}");
         eprintln!(
             "sphere 1e-4 layer, {cells} hexes, p = {p}: min det J {:.3e}, scaled Jacobian min {:.4}, sphere nodes within {off:.1e}, sampled {ours:.2e} (Gmsh setOrder {theirs:.2e}, {} invalid), first layer {:.1e} at the vertices, {} runs, {:?}, {:.1}s; Gmsh {a:?}",
             r.quality.min_det_j, r.quality.scaled_jacobian.min, gmsh["invalid"], layer.vertices, r.algorithm2_runs, r.quality.boundary_data, r.total_s
         );
+        assert_eq!(a.sj_not_positive, 0, "{a:?}");
     }
 }
 
@@ -609,9 +609,11 @@ fn sliding_boundaries_converge_at_the_order_on_a_quarter_disk() {
     // Gmsh's three-block quarter disk (tests/python/quarter_disk.py), so
     // no cell has two sides on the arc (Algorithm 1's image of the square
     // has one such cell, which caps sliding at p = 3 near order 3.4:
-    // tests/it/highorder.rs). Sliding, settled, the default: measured
-    // 4.0 / 4.0 / 6.0 at p = 2 / 3 / 4, every element valid, every new
-    // arc node settled by moving it alone
+    // tests/it/highorder.rs). Sliding, settled at the fitted places, the
+    // default: measured 4.0 / 6.0 at p = 2 / 3 (order 2p; 4.0 / 4.0 at
+    // equal arc length), every element valid, every new arc node settled
+    // by moving it alone. At p = 4 the error is at round-off from the
+    // coarsest mesh (1.9e-14, then 5e-16): held there instead of a rate
     let dir = tempfile::tempdir().unwrap();
     let meshes: Vec<(PathBuf, f64)> = [4, 8, 16]
         .iter()
@@ -637,7 +639,11 @@ fn sliding_boundaries_converge_at_the_order_on_a_quarter_disk() {
         for (k, w) in errors.windows(2).enumerate() {
             let rate = (w[0] / w[1]).ln() / (meshes[k].1 / meshes[k + 1].1).ln();
             eprintln!("quarter disk, p = {p}: h {:.4} → {:.4}, error {:.3e} → {:.3e}, observed order {rate:.2}", meshes[k].1, meshes[k + 1].1, w[0], w[1]);
-            assert!(rate >= p as f64 + 0.5, "p = {p}: observed order {rate:.2}");
+            if p == 4 {
+                assert!(w[0] < 1e-13 && w[1] < 1e-13, "p = 4: errors {:.3e}, {:.3e}", w[0], w[1]);
+                continue;
+            }
+            assert!(rate >= 2.0 * p as f64 - 0.5, "p = {p}: observed order {rate:.2}");
         }
     }
 }

@@ -126,6 +126,10 @@ fn straight_angle_cells(mesh: &deformesh::mesh::CurvedMesh<2>) -> Vec<usize> {
         .collect()
 }
 
+/// A boundary error this small (on a unit-sized mesh) is round-off: no
+/// rate can be observed below it.
+const ROUND_OFF: f64 = 1e-12;
+
 #[test]
 fn boundary_error_converges_like_h_to_the_p_plus_1() {
     // Algorithm 2 with the paper's Dirichlet data (each new arc node goes
@@ -135,20 +139,20 @@ fn boundary_error_converges_like_h_to_the_p_plus_1() {
     // longer than 1/n relative to the rest, so h does not halve with n.
     // That corner cell has two sides on the arc, det J = 0 at their common
     // vertex in the exact geometry, and its sign in the curved cell is
-    // decided by O(h^p) tilts of the two sides: at p = 3 settled nodes
-    // leave it invalid, and so do the images of their flat places and a
-    // whole run with Dirichlet data (checked: all four step sizes), so
-    // settling leaves its nodes where sliding put them (the only demoted
-    // cell; `kept_elements` lists it and the cells sharing its nodes),
-    // and its sides set the error: order 3.41 – 3.47 measured there. A
-    // least shift from the settled places that keeps it valid gives 3.58
-    // and 3.66 (tried, and not kept: it leaves that cell's scaled Jacobian
-    // at 1e-6, and the 3D cases' at 1e-5 for a 6 – 14 % smaller error).
-    // Without that cell, on Gmsh's three-block quarter disk, sliding
-    // reaches 4.0 / 4.0 / 6.0 (tests/it/curve_import.rs). (The
-    // Dirichlet rows at p = 3 and 4 and the sliding rows at p = 4 leave
-    // that one cell invalid, as printed: `curve` returns such a mesh with
-    // its certificates, `deformesh curve` refuses to write it.)
+    // decided by O(h^p) tilts of the two sides: where settled nodes leave
+    // it invalid, settling leaves its nodes where sliding put them (the
+    // only cell it may demote; `kept_elements` lists it and the cells
+    // sharing its nodes), and its sides set the error at p = 3: order
+    // 3.41 – 3.47 measured there. Sliding settles the new nodes at their
+    // fitted places (geometry::fit), where a curve is approximated to
+    // order 2p, unless they cost a cell its shape: at p = 3 they do here
+    // (near that corner), and every node goes to equal arc length; at
+    // p = 4 the fitted error is at round-off (5e-15 to 6e-14) on every
+    // mesh, so it is held there instead of a rate. Dirichlet data (the
+    // paper's, each node along its ray) keeps p + 1: 4.0 / 4.0 / 6.0. (The Dirichlet rows at p = 3 and
+    // 4 and the sliding rows at p = 4 may leave that one cell invalid, as
+    // printed: `curve` returns such a mesh with its certificates,
+    // `deformesh curve` refuses to write it.)
     for mode in [MoveMode::Dirichlet, MoveMode::Sliding] {
         let meshes: Vec<(QuadMesh, Vec<BoundaryPart<2>>)> = [8, 16, 32].iter().map(|&n| quarter_disk(n, mode)).collect();
         for p in 2..=4 {
@@ -169,6 +173,10 @@ fn boundary_error_converges_like_h_to_the_p_plus_1() {
             for w in errs.windows(2) {
                 let rate = (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln();
                 eprintln!("{mode:?}, p = {p}: h {:.4} → {:.4}, error {:.3e} → {:.3e}, observed order {rate:.2}", w[0].0, w[1].0, w[0].1, w[1].1);
+                if mode == MoveMode::Sliding && p == 4 {
+                    assert!(w[0].1 < ROUND_OFF && w[1].1 < ROUND_OFF, "{mode:?}, p = {p}: errors {:.3e}, {:.3e}", w[0].1, w[1].1);
+                    continue;
+                }
                 let least = if mode == MoveMode::Sliding && p == 3 { 3.35 } else { p as f64 + 0.5 };
                 assert!(rate >= least, "{mode:?}, p = {p}: observed order {rate:.2}");
             }

@@ -40,13 +40,17 @@ fn largest_differences<const D: usize>(a: &CurvedMesh<D>, b: &CurvedMesh<D>, wal
     (on_wall.iter().map(|&n| diff(n)).fold(0.0, f64::max), (0..a.nodes.len()).map(diff).fold(0.0, f64::max))
 }
 
-/// The wall's nodes are projections and their arc-length placement: they
-/// must agree to round-off. The other nodes come from the deformation's
+/// The wall's nodes are projections at their fitted places
+/// (`geometry::fit`): they agree to the fit's precision along the wall,
+/// whose least-squares objective is flat at its minimum (round-off in the
+/// two projections moves them by up to 3.0e-10, measured at p = 3; the
+/// error they leave is the same). The other
+/// nodes come from the deformation's
 /// iterative solve (CG to a relative residual of 1e-7), which turns
 /// round-off differences on the wall into up to 1e-10 (measured, test
 /// profile): they are held to the solver's level only.
 fn assert_agree(what: &str, (wall, all): (f64, f64)) {
-    assert!(wall < 1e-12, "{what}: wall nodes {wall:e}");
+    assert!(wall < 1e-9, "{what}: wall nodes {wall:e}");
     assert!(all < 1e-8, "{what}: all nodes {all:e}");
 }
 
