@@ -89,6 +89,12 @@ pub fn fitted_places<const D: usize>(curve: impl Fn(f64) -> [f64; D], foot: impl
                 damped[j][j] *= 1.0 + damping;
             }
             let Some(step) = solve(damped, g.clone()) else { break };
+            // a step this short that does not lower the offsets is at
+            // their round-off: converged (damping it further only costs
+            // evaluations, a dozen per line measured)
+            if step.iter().all(|s| s.abs() < 1e-12) {
+                return (norm2(&r) < first).then_some(x);
+            }
             let next: Vec<f64> = x.iter().zip(&step).map(|(x, s)| x + s).collect();
             if let Some(rn) = ordered(&next).then(|| residual(&next)).flatten() {
                 if norm2(&rn) < norm2(&r) {
