@@ -751,9 +751,9 @@ struct Line {
 
 impl Line {
     /// The parameter of the node at reference place `r`.
-    fn place(&self, r: f64) -> f64 {
-        let j = self.reference.iter().position(|&x| x == r).expect("every fitted node is on its line");
-        self.places[j]
+    fn place(&self, r: f64) -> Option<f64> {
+        let j = self.reference.iter().position(|&x| x == r)?;
+        Some(self.places[j])
     }
 }
 
@@ -972,7 +972,12 @@ impl<const D: usize> RefineBoundary<D> {
                 // a triangle's iso-lines end on its hypotenuse, not at 1:
                 // its nodes go to the images of their flat places
                 Settle::Fit | Settle::Arc if car.corners.len() == 3 => s,
-                Settle::Fit => std::array::from_fn(|d| if d < car.dims() { fits[&line_key(carrier, s, d)].place(s[d]) } else { s[d] }),
+                // (every line is fitted: equal arc length is only a guard)
+                Settle::Fit => std::array::from_fn(|d| match fits.get(&line_key(carrier, s, d)).and_then(|l| l.place(s[d])) {
+                    Some(x) if d < car.dims() => x,
+                    _ if d < car.dims() => self.arc_place(carrier, s, d),
+                    _ => s[d],
+                }),
                 Settle::Arc => self.arc_parameter(carrier, s),
                 Settle::Image => s,
                 Settle::Keep => {
