@@ -973,10 +973,12 @@ impl<const D: usize> RefineBoundary<D> {
                 // its nodes go to the images of their flat places
                 Settle::Fit | Settle::Arc if car.corners.len() == 3 => s,
                 // (every line is fitted: equal arc length is only a guard)
-                Settle::Fit => std::array::from_fn(|d| match fits.get(&line_key(carrier, s, d)).and_then(|l| l.place(s[d])) {
-                    Some(x) if d < car.dims() => x,
-                    _ if d < car.dims() => self.arc_place(carrier, s, d),
-                    _ => s[d],
+                Settle::Fit => std::array::from_fn(|d| {
+                    if d < car.dims() {
+                        fits.get(&line_key(carrier, s, d)).and_then(|l| l.place(s[d])).unwrap_or_else(|| self.arc_place(carrier, s, d))
+                    } else {
+                        s[d]
+                    }
                 }),
                 Settle::Arc => self.arc_parameter(carrier, s),
                 Settle::Image => s,
@@ -1033,40 +1035,37 @@ impl<const D: usize> RefineBoundary<D> {
 
     /// The `k`-th coordinate of [`Self::arc_parameter`].
     fn arc_place(&self, c: usize, s: [f64; 2], k: usize) -> f64 {
-        {
-            let speed = |x: f64| {
-                let mut q = s;
-                q[k] = x;
-                // the image is Γ_t at t = 1
-                norm(self.precise_tangent(c, q, k))
-            };
-            // 5-point Gauss–Legendre on [a, b]
-            let piece = |a: f64, b: f64| GL5.iter().map(|&(xi, w)| w * (b - a) * speed(a + xi * (b - a))).sum::<f64>();
-            // composite on 4 pieces of [0, x]
-            let length = |x: f64| (0..4).map(|j| piece(x * j as f64 / 4.0, x * (j + 1) as f64 / 4.0)).sum::<f64>();
-            let goal = s[k] * length(1.0);
-            // Newton on the arc length, kept inside [0, 1]; the length at x
-            // is the start's and the short stretch from s to x (one piece:
-            // a quarter of the images a whole new length would take)
-            let before = length(s[k]);
-            let (mut x, mut at) = (s[k], before);
-            for _ in 0..30 {
-                let step = (at - goal) / speed(x).max(f64::MIN_POSITIVE);
-                x = (x - step).clamp(0.0, 1.0);
-                if step.abs() < 1e-14 {
-                    break;
-                }
-                at = before + piece(s[k], x);
+        let speed = |x: f64| {
+            let mut q = s;
+            q[k] = x;
+            // the image is Γ_t at t = 1
+            norm(self.precise_tangent(c, q, k))
+        };
+        // 5-point Gauss–Legendre on [a, b]
+        let piece = |a: f64, b: f64| GL5.iter().map(|&(xi, w)| w * (b - a) * speed(a + xi * (b - a))).sum::<f64>();
+        // composite on 4 pieces of [0, x]
+        let length = |x: f64| (0..4).map(|j| piece(x * j as f64 / 4.0, x * (j + 1) as f64 / 4.0)).sum::<f64>();
+        let goal = s[k] * length(1.0);
+        // Newton on the arc length, kept inside [0, 1]; the length at x
+        // is the start's and the short stretch from s to x (one piece:
+        // a quarter of the images a whole new length would take)
+        let before = length(s[k]);
+        let (mut x, mut at) = (s[k], before);
+        for _ in 0..30 {
+            let step = (at - goal) / speed(x).max(f64::MIN_POSITIVE);
+            x = (x - step).clamp(0.0, 1.0);
+            if step.abs() < 1e-14 {
+                break;
             }
-            x
+            at = before + piece(s[k], x);
         }
+        x
     }
 
     /// The fitted places ([`Settle::Fit`]) of every line of new nodes of
     /// a curved carrier: per line (carrier, direction, the other
     /// coordinate), each node's reference place and its parameter.
     fn fitted_lines(&self) -> Fits {
-        use rayon::prelude::*;
         let t0 = std::time::Instant::now();
         let mut lines: HashMap<LineKey, Vec<f64>> = HashMap::new();
         for role in &self.roles {
@@ -1084,7 +1083,11 @@ impl<const D: usize> RefineBoundary<D> {
         }
         let lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
         let count = lines.len();
-        let fits: Fits = lines.into_par_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
+        // one line after another: fitted in parallel (rayon), the places
+        // differed from run to run (first-layer change of water_wave_p3
+        // by 2e-5 relative on 2 threads, identical on 1; cause not
+        // found), and on CAD the projections queue for Gmsh's lock anyway
+        let fits: Fits = lines.into_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
         tracing::info!("settling: {count} lines of new nodes fitted in {:.2} s", t0.elapsed().as_secs_f64());
         fits
     }

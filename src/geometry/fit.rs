@@ -172,14 +172,16 @@ struct Interpolant {
 
 impl Interpolant {
     fn new(reference: &[f64]) -> Self {
-        let weights = |t: f64| -> Vec<f64> {
-            (0..reference.len())
-                .map(|j| (0..reference.len()).filter(|&k| k != j).map(|k| (t - reference[k]) / (reference[j] - reference[k])).product())
-                .collect()
-        };
-        let samples = reference.windows(2).flat_map(|w| SAMPLES.iter().map(move |&s| w[0] + s * (w[1] - w[0]))).map(weights).collect();
+        let samples = reference.windows(2).flat_map(|w| SAMPLES.iter().map(move |&s| w[0] + s * (w[1] - w[0]))).map(|t| weights(reference, t)).collect();
         Interpolant { samples }
     }
+}
+
+/// The Lagrange weights at `t` of nodes at `reference`.
+fn weights(reference: &[f64], t: f64) -> Vec<f64> {
+    (0..reference.len())
+        .map(|j| (0..reference.len()).filter(|&k| k != j).map(|k| (t - reference[k]) / (reference[j] - reference[k])).product())
+        .collect()
 }
 
 #[cfg(test)]
@@ -194,7 +196,7 @@ mod tests {
         (0..=400)
             .map(|i| {
                 let t = i as f64 / 400.0;
-                let w: Vec<f64> = (0..4).map(|j| (0..4).filter(|&k| k != j).map(|k| (t - reference[k]) / (reference[j] - reference[k])).product()).collect();
+                let w = weights(&reference, t);
                 let q: [f64; 2] = std::array::from_fn(|c| (0..4).map(|j| w[j] * nodes[j][c]).sum());
                 dist2(q, foot(q)).sqrt()
             })

@@ -1014,7 +1014,7 @@ where
         // where a fitted place shears a cell, every node goes back to equal
         // arc length: a line of nodes part fitted, part not, shears the
         // thin cells along it as well (measured on the sphere's layer)
-        if !fit_costs_shape(&pass, slid, places).is_empty() {
+        if fit_costs_shape(&pass, slid, places) {
             for n in places.iter_mut().filter(|n| **n == Settle::Fit) {
                 *n = Settle::Arc;
                 changed = true;
@@ -1029,16 +1029,13 @@ where
     }
 }
 
-/// The cells with a fitted node ([`Settle::Fit`]) whose scaled Jacobian
-/// in `pass` is under [`FIT_KEEP`] of the sliding result's.
-fn fit_costs_shape<const D: usize>(pass: &Pass<D>, slid: &Pass<D>, places: &[Settle]) -> Vec<usize> {
-    (0..slid.mesh.cells.len())
-        .filter(|&c| slid.mesh.cells[c].iter().any(|&n| places[n] == Settle::Fit))
-        .filter(|&c| {
-            let (now, was) = (&pass.certificates[c], &slid.certificates[c]);
-            was.valid && now.min_scaled_jacobian < FIT_KEEP * was.min_scaled_jacobian
-        })
-        .collect()
+/// Whether a cell with a fitted node ([`Settle::Fit`]) has a scaled
+/// Jacobian in `pass` under [`FIT_KEEP`] of the sliding result's.
+fn fit_costs_shape<const D: usize>(pass: &Pass<D>, slid: &Pass<D>, places: &[Settle]) -> bool {
+    (0..slid.mesh.cells.len()).any(|c| {
+        let (now, was) = (&pass.certificates[c], &slid.certificates[c]);
+        slid.mesh.cells[c].iter().any(|&n| places[n] == Settle::Fit) && was.valid && now.min_scaled_jacobian < FIT_KEEP * was.min_scaled_jacobian
+    })
 }
 
 /// How much of a cell's scaled Jacobian its fitted nodes must keep. Why:
