@@ -1083,10 +1083,10 @@ impl<const D: usize> RefineBoundary<D> {
         }
         let lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
         let count = lines.len();
-        // one line after another: fitted in parallel (rayon), the places
-        // differed from run to run (first-layer change of water_wave_p3
-        // by 2e-5 relative on 2 threads, identical on 1; cause not
-        // found), and on CAD the projections queue for Gmsh's lock anyway
+        // one line after another: on CAD the projections queue for Gmsh's
+        // lock anyway. (Tried in parallel too: water_wave_p3's figures
+        // vary from run to run by 1e-5 either way, the settling flow's
+        // solve being the likelier source; not settled)
         let fits: Fits = lines.into_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
         tracing::info!("settling: {count} lines of new nodes fitted in {:.2} s", t0.elapsed().as_secs_f64());
         fits
