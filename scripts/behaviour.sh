@@ -23,13 +23,12 @@
 # prints them with all 17 digits) must agree to a relative 1e-6, plus an
 # absolute 1e-12 for figures at round-off level (boundary distances of
 # 1e-16 on domains of size 1): |a - b| <= RTOL * max(|a|, |b|) + ATOL.
-# Why not all 17 digits: two runs of the same release binary already
-# differ (measured on water_wave_p3: J/f, det J, c(1) by 1e-16 to 1e-11
-# relative, the sampled boundary distance by 7e-10, boundary-node distances
-# of 5e-16 by 10 %; the source, some order of summation, not traced), a
-# debug build differs from a release one by 1.5e-9, and CG/AMG runs stop at a relative residual
-# of 1e-7, so a change of summation order in the redesign moves their
-# figures by about that much. Set BEHAVIOUR_RTOL / BEHAVIOUR_ATOL to
+# Why not all 17 digits: runs are repeatable (every parallel sum is taken
+# in fixed chunks; the last one that was not, the normalisation's, let
+# water_wave_p3's settling flow differ by 1e-5 from run to run until
+# stop 32), and the test build and the release build give the same 17
+# digits today, but CG/AMG runs stop at a relative residual of 1e-7, so a
+# mere change of summation order moves their figures by about that much. Set BEHAVIOUR_RTOL / BEHAVIOUR_ATOL to
 # tighten or loosen. Each passing run prints its largest relative
 # difference. Whole script: about 165 s on 2 busy cores; --quick about 20 s.
 #

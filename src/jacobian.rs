@@ -424,6 +424,9 @@ pub fn lift<const D: usize>(x: [f64; D]) -> Point3 {
     std::array::from_fn(|i| if i < D { x[i] } else { 0.0 })
 }
 
+/// Cells per parallel chunk of [`normalise`].
+const NORMALISE_CHUNK: usize = 1024;
+
 /// Computes c(t) and c'(t) on the mesh of Ω_t given by `cells` at
 /// positions `nodes`: `volume0` = |Ω₀|, `boundary` the quadrature of the
 /// boundary flux, pairs (x, v·n dS) with v the velocity of the moving
@@ -436,20 +439,26 @@ pub fn normalise<const D: usize, const N: usize>(
     volume0: f64,
     boundary: impl Iterator<Item = ([f64; D], f64)>,
 ) -> Result<Normalisation, JacobianError> {
-    let (inv_g, dt_term) = cells
-        .par_iter()
-        .map(|cell| {
-            let p = cell.map(|n| nodes[n]);
+    // fixed chunks summed in order: rayon's own reduction splits where
+    // work is stolen, so its sum differed from run to run in the last
+    // digits, and a settling flow (water_wave_p3) magnified that to 1e-5
+    let partial = cells
+        .par_chunks(NORMALISE_CHUNK)
+        .map(|chunk| {
             let mut acc = (0.0, 0.0);
-            for (xi, w) in cell_quadrature::<D, N>() {
-                let (x, det, _) = q1_eval(&p, xi);
-                let (g, gt) = field.g_checked(lift(x), t)?;
-                acc.0 += w * det / g;
-                acc.1 -= w * det * gt / (g * g);
+            for cell in chunk {
+                let p = cell.map(|n| nodes[n]);
+                for (xi, w) in cell_quadrature::<D, N>() {
+                    let (x, det, _) = q1_eval(&p, xi);
+                    let (g, gt) = field.g_checked(lift(x), t)?;
+                    acc.0 += w * det / g;
+                    acc.1 -= w * det * gt / (g * g);
+                }
             }
             Ok(acc)
         })
-        .try_reduce(|| (0.0, 0.0), |a, b| Ok((a.0 + b.0, a.1 + b.1)))?;
+        .collect::<Result<Vec<(f64, f64)>, JacobianError>>()?;
+    let (inv_g, dt_term) = partial.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
     let mut flux = 0.0;
     for (x, vn_ds) in boundary {
         flux += vn_ds / field.g_checked(lift(x), t)?.0;

