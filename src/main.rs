@@ -252,7 +252,8 @@ fn run(cli: Cli) -> Result<()> {
             }
             println!("{}", settling_line(&r.quality.settling, r.quality.boundary_data.dirichlet));
             let runs = if r.algorithm2_runs > 1 { format!(", run {} times", r.algorithm2_runs) } else { String::new() };
-            println!("time: algorithm 2 {:.3}s ({} steps, {} halved{runs})  certification {:.3}s  total {:.3}s", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
+            let memory = r.peak_memory_mib.map_or(String::new(), |m| format!("  peak memory {m:.0} MiB"));
+            println!("time: algorithm 2 {:.3}s ({} steps, {} halved{runs})  certification {:.3}s  total {:.3}s{memory}", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
             println!("wrote {}", r.outputs.join(", "));
             Ok(())
         }

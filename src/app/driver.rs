@@ -165,6 +165,9 @@ pub struct Timings {
     pub solve_s: f64,
     /// Whole run, outputs included.
     pub total_s: f64,
+    /// Peak resident memory of the process when the report was written,
+    /// in MiB (Linux's VmHWM; null elsewhere).
+    pub peak_memory_mib: Option<f64>,
 }
 
 /// `report.json`.
@@ -569,10 +572,11 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
             certify_s: c.seconds.1,
             definitions: "det J of the order-p Lagrange map from the reference [0,1]^d (Gmsh's [-1,1]^d gives 2^-d of it): min_det_j is a certified lower bound from Bezier coefficients with subdivision, min_det_j_attained a value det J takes; scaled Jacobian det J/(product of column norms of J), per element its minimum on a (3p+1)^d grid; boundary distances to the exact shapes of moving (and curved slip) parts, at the nodes and at samples of the curved boundary",
         }),
-        time: Timings { assembly_s: stats.assembly.as_secs_f64(), analyze_s: stats.analyze.as_secs_f64(), factor_s: stats.factor.as_secs_f64(), solve_s: stats.solve.as_secs_f64(), total_s: 0.0 },
+        time: Timings { assembly_s: stats.assembly.as_secs_f64(), analyze_s: stats.analyze.as_secs_f64(), factor_s: stats.factor.as_secs_f64(), solve_s: stats.solve.as_secs_f64(), total_s: 0.0, peak_memory_mib: None },
         outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(REPORT.to_string())).collect(),
     };
     report.time.total_s = clock.elapsed().as_secs_f64();
+    report.time.peak_memory_mib = super::bench::peak_memory_mib();
     let json = serde_json::to_string_pretty(&report).expect("report serialises");
     files.push((REPORT.into(), json.into_bytes()));
     write_set(out_dir, &files, REPORT)?;
@@ -764,6 +768,9 @@ pub struct CurveReport {
     pub certify_s: f64,
     /// Whole job.
     pub total_s: f64,
+    /// Peak resident memory of the process when the report was written,
+    /// in MiB (Linux's VmHWM; null elsewhere).
+    pub peak_memory_mib: Option<f64>,
     /// Files written.
     pub outputs: Vec<String>,
 }
@@ -1093,9 +1100,11 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
         algorithm2_s: c.seconds.0,
         certify_s: c.seconds.1,
         total_s: 0.0,
+        peak_memory_mib: None,
         outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(format!("{stem}.report.json"))).collect(),
     };
     report.total_s = clock.elapsed().as_secs_f64();
+    report.peak_memory_mib = super::bench::peak_memory_mib();
     files.push((format!("{stem}.report.json"), serde_json::to_string_pretty(&report).expect("report serialises").into_bytes()));
     write_set(&dir, &files, &format!("{stem}.report.json"))?;
     Ok(report)

@@ -83,3 +83,33 @@ fn the_multigrid_keeps_its_iterations_on_thin_layers() {
         assert!(hi <= 2.0 * lo, "p = {p}: iterations per solve {means:?}");
     }
 }
+
+#[test]
+fn the_report_gives_the_peak_memory_the_kernel_measured() {
+    // the binary in a child of Python, whose getrusage(RUSAGE_CHILDREN)
+    // is the kernel's peak resident set of that one child (in KiB)
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("geometry.toml");
+    std::fs::write(&g, BALL_OCTANT).unwrap();
+    let out = dir.path().join("curved.msh");
+    let wrapper = "import resource, subprocess, sys\n\
+                   subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL)\n\
+                   print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)";
+    let ran = std::process::Command::new(common::python())
+        .args(["-c", wrapper, env!("CARGO_BIN_EXE_deformesh"), "curve"])
+        .arg(data("ball_octant_hex.msh"))
+        .arg("--geometry")
+        .arg(&g)
+        .args(["--order", "2", "--steps", "1", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(ran.status.success(), "{}", String::from_utf8_lossy(&ran.stderr));
+    let kernel: f64 = String::from_utf8_lossy(&ran.stdout).trim().parse().unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path().join("curved.report.json")).unwrap()).unwrap();
+    let ours = report["peak_memory_mib"].as_f64().expect("peak_memory_mib in report.json");
+    // the report is written last; what follows it (writing the files
+    // already in memory, freeing) adds no resident memory
+    eprintln!("peak memory: report {ours:.1} MiB, kernel {kernel:.1} MiB");
+    assert!(ours <= kernel + 0.01 && ours >= 0.98 * kernel, "report {ours} MiB, kernel {kernel} MiB");
+}
