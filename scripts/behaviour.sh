@@ -68,7 +68,9 @@ ball="tests/data/ball_octant_hex.msh --geometry tests/data/behaviour/ball_octant
 runs+=("curve_cylinder_p2|1|curve $cyl --order 2 --steps 10 -o {out}/curved.msh")
 runs+=("curve_cylinder_p3_gauss_lobatto|0|curve $cyl --order 3 --steps 10 --spacing gauss_lobatto -o {out}/curved.msh")
 runs+=("curve_cylinder_p2_dirichlet|0|curve $cyl --order 2 --steps 10 --mode dirichlet -o {out}/curved.msh")
-runs+=("curve_ball_octant_p2|1|curve $ball --order 2 --steps 3 -o {out}/curved.msh")
+runs+=("curve_ball_octant_p2|1|curve $ball --order 2 --steps 3 --snap never -o {out}/curved.msh")
+# the default `--snap auto` on cells where the snap is kept: Algorithm 2 not run
+runs+=("curve_ball_octant_p3_snap|0|curve $ball --order 3 -o {out}/curved.msh")
 
 selected=()
 for r in "${runs[@]}"; do

@@ -95,6 +95,12 @@ enum Command {
         /// node); `all`: on the whole mesh.
         #[arg(long, default_value_t = deformesh::refine::ALG2_BAND.to_string())]
         band: String,
+        /// auto: first put the new boundary nodes on the shapes, nothing
+        /// else moved (Gmsh's setOrder), and keep that without running
+        /// Algorithm 2 if every element is certified valid and keeps 0.9
+        /// of its straight scaled Jacobian; never: always Algorithm 2.
+        #[arg(long, default_value = "auto")]
+        snap: String,
         /// The curved mesh to write: its extension chooses the format
         /// (`.msh` Gmsh MSH 4.1, `.mesh` MFEM, `.inp` ABAQUS for Trixi.jl).
         #[arg(short, long)]
@@ -198,7 +204,7 @@ fn run(cli: Cli) -> Result<()> {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, &out, "<built-in demo>")
         }
-        Command::Curve { mesh, cad, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, out, format } => {
+        Command::Curve { mesh, cad, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, snap, out, format } => {
             usage(shape_tolerance.is_finite() && shape_tolerance > 0.0, || format!("--shape-tolerance must be a positive number, got {shape_tolerance}"))?;
             deformesh::highorder::check_order(order).map_err(|e| Usage(format!("--order: {e}")))?;
             usage(steps != Some(0), || "--steps must be at least 1".into())?;
@@ -218,10 +224,15 @@ fn run(cli: Cli) -> Result<()> {
                 // 0.02 on a 1e-3 layer; 1 ran in 3 steps like the default)
                 w => Some(w.parse::<f64>().ok().filter(|w| w.is_finite() && *w >= 1.0).ok_or_else(|| Usage(format!("--band must be a number of facet lengths of at least 1, or `all`, got `{w}`")))?),
             };
+            let snap_first = match snap.as_str() {
+                "auto" => true,
+                "never" => false,
+                other => return Err(Usage(format!("--snap must be auto or never, got `{other}`")).into()),
+            };
             let format = OutputFormat::choose(&out, format.as_deref()).map_err(Usage)?;
             usage(!same_file(&mesh, &out), || format!("-o `{}` is the input mesh: the curved mesh must go to another file", out.display()))?;
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
-            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, band, ..Default::default() };
+            let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, band, snap_first, ..Default::default() };
             deformesh::io::folder::check_output_file(&out)?;
             let cad = cad.map(|model| deformesh::app::driver::CadSource { model, library: None });
             let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, cad, output: out.clone(), format, options, width: 900 };
@@ -250,10 +261,20 @@ fn run(cli: Cli) -> Result<()> {
                 };
                 println!("algorithm 2: sliding {left}; this mesh is from a run with Dirichlet data (straight paths)");
             }
-            println!("{}", settling_line(&r.quality.settling, r.quality.boundary_data.dirichlet));
-            let runs = if r.algorithm2_runs > 1 { format!(", run {} times", r.algorithm2_runs) } else { String::new() };
             let memory = r.peak_memory_mib.map_or(String::new(), |m| format!("  peak memory {m:.0} MiB"));
-            println!("time: algorithm 2 {:.3}s ({} steps, {} halved{runs})  certification {:.3}s  total {:.3}s{memory}", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
+            let snap = &r.quality.snap_first;
+            if snap.kept {
+                let places = if snap.fitted { "fitted places" } else { "places at equal arc length (the fitted ones cost a cell its shape)" };
+                println!("snap: new boundary nodes put at their {places} on the shapes, every element valid and within {} of its straight scaled Jacobian: Algorithm 2 not run", deformesh::highorder::curve::SNAP_KEEP);
+                println!("time: snap and certification {:.3}s  total {:.3}s{memory}", r.certify_s + r.algorithm2_s, r.total_s);
+            } else {
+                if let Some(why) = &snap.refused {
+                    println!("snap: not kept ({why}): Algorithm 2");
+                }
+                println!("{}", settling_line(&r.quality.settling, r.quality.boundary_data.dirichlet));
+                let runs = if r.algorithm2_runs > 1 { format!(", run {} times", r.algorithm2_runs) } else { String::new() };
+                println!("time: algorithm 2 {:.3}s ({} steps, {} halved{runs})  certification {:.3}s  total {:.3}s{memory}", r.algorithm2_s, r.steps, r.halved_steps, r.certify_s, r.total_s);
+            }
             println!("wrote {}", r.outputs.join(", "));
             Ok(())
         }

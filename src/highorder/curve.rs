@@ -57,6 +57,13 @@ pub struct CurveOptions {
     /// ([`Subdivision::band`], [`ALG2_BAND`]); widened where an element not
     /// certified valid has a held node. None: on the whole mesh.
     pub band: Option<f64>,
+    /// First try Gmsh's `setOrder` way: the new nodes of the curved
+    /// facets put on their shapes, nothing else moved; keep it, without
+    /// running Algorithm 2, if every element is certified valid and keeps
+    /// [`SNAP_KEEP`] of its straight scaled Jacobian ([`SnapFirst`]).
+    /// Off by default in the library (the method is Algorithm 2); `curve`'s
+    /// `--snap auto`, its default, turns it on.
+    pub snap_first: bool,
 }
 
 /// The default of [`CurveOptions::shape_tolerance`]: 1e-3 of the local
@@ -88,7 +95,7 @@ pub const AUTO_STEPS: [usize; 4] = [1, 2, 4, 8];
 
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE, band: Some(ALG2_BAND) }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE, band: Some(ALG2_BAND), snap_first: false }
     }
 }
 
@@ -263,6 +270,24 @@ pub struct CurvedQuality {
     pub boundary_data: BoundaryData,
     /// Where Algorithm 2 solved.
     pub band: Band,
+    /// The snap tried before Algorithm 2 ([`CurveOptions::snap_first`]).
+    pub snap_first: SnapFirst,
+}
+
+/// What the snap before Algorithm 2 did ([`CurveOptions::snap_first`]).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SnapFirst {
+    /// It was tried.
+    pub tried: bool,
+    /// Its mesh is the result: Algorithm 2 did not run.
+    pub kept: bool,
+    /// The kept snap put the new nodes at their fitted places
+    /// ([`Settle::Fit`]), not at equal arc length.
+    pub fitted: bool,
+    /// Why it was not kept: the first elements it left not certified
+    /// valid or sheared under [`SNAP_KEEP`] of their straight scaled
+    /// Jacobian.
+    pub refused: Option<String>,
 }
 
 /// Where Algorithm 2 solved ([`CurveOptions::band`]).
@@ -557,6 +582,7 @@ fn summary<const D: usize>(mesh: &CurvedMesh<D>, certs: &[Certificate]) -> Curve
         settling: Settling::default(),
         boundary_data: BoundaryData::default(),
         band: Band::default(),
+        snap_first: SnapFirst::default(),
     }
 }
 
@@ -629,19 +655,76 @@ fn on_shape_parts<const D: usize>(nodes: &[[f64; D]], facets: &[(Vec<usize>, usi
 }
 
 /// Algorithms 2 and 3 from the subdivided mesh, with the part names, the
-/// largest coarse cell aspect and the clock started before subdividing.
+/// largest coarse cell aspect and the clock started before subdividing;
+/// with [`CurveOptions::snap_first`], the snap first, Algorithm 2 only
+/// where it is not kept.
 fn curve_subdivided<M, const D: usize, const N: usize>(
     sub: &Subdivision<M, D>,
     (names, aspect, clock): (&[String], f64, Instant),
-    mut parts2: Vec<BoundaryPart<D>>,
+    parts2: Vec<BoundaryPart<D>>,
     opts: &CurveOptions,
-    mut progress: impl FnMut(f64, &RunStats),
+    progress: impl FnMut(f64, &RunStats),
 ) -> Result<Curved<D>, CurveError>
 where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
 {
     let p = opts.order;
+    let mut certify_s = 0.0;
+    let mut snap_first = SnapFirst { tried: opts.snap_first && !opts.dirichlet, ..Default::default() };
+    let snapped = if snap_first.tried { snap_straight(sub, names, &parts2, opts, &mut certify_s)? } else { Err(String::new()) };
+    let (pass, attempts, parts2) = match snapped {
+        Ok((pass, fitted)) => {
+            tracing::info!("the snap kept every element valid and shaped: Algorithm 2 not run");
+            (snap_first.kept, snap_first.fitted) = (true, fitted);
+            (pass, 0, parts2)
+        }
+        Err(why) => {
+            if snap_first.tried {
+                tracing::info!("the snap was not kept ({why}): Algorithm 2");
+                snap_first.refused = Some(why);
+            }
+            let (pass, attempts, seconds, parts2) = deformed(sub, (names, aspect), parts2, opts, progress)?;
+            certify_s += seconds;
+            (pass, attempts, parts2)
+        }
+    };
+    let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = pass;
+    quality.snap_first = snap_first;
+    let alg2 = clock.elapsed().as_secs_f64() - certify_s;
+    let clock = Instant::now();
+    let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
+    // corners of a boundary element, in cyclic order
+    let at = corner_positions(mesh.shape.facet_shape(), p);
+    let corners = |f: &[usize]| at.iter().map(|&c| f[c]).collect();
+    if let Some(mut o) = worst_off_shape(&mesh.nodes, &fine_facets, corners, &parts2, &mesh.part_names, opts.shape_tolerance) {
+        o.after = true;
+        return Err(CurveError::OffShape(Box::new(o)));
+    }
+    // every node of a curved boundary element, the old (fixed) ones too:
+    // they were not moved, so only this shows a vertex off its shape
+    quality.boundary_error = boundary_errors(&mesh, &parts2, opts.samples)?;
+    quality.boundary_node_distance = quality.boundary_error.values().map(|e| e.nodes).fold(moved_distance, f64::max);
+    quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
+    quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
+    let seconds = (alg2, certify_s + clock.elapsed().as_secs_f64());
+    Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds, coarse_nodes: sub.coarse_nodes.clone() })
+}
+
+/// Algorithm 2 with its fallbacks and the settling pass: the pass kept,
+/// the runs of Algorithm 2, the seconds spent certifying, and the parts
+/// it ran with.
+fn deformed<M, const D: usize, const N: usize>(
+    sub: &Subdivision<M, D>,
+    (names, aspect): (&[String], f64),
+    mut parts2: Vec<BoundaryPart<D>>,
+    opts: &CurveOptions,
+    mut progress: impl FnMut(f64, &RunStats),
+) -> Result<(Pass<D>, usize, f64, Vec<BoundaryPart<D>>), CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
     let dirichlet_parts = with_dirichlet_data(&parts2);
     if opts.dirichlet {
         parts2 = dirichlet_parts.clone();
@@ -729,27 +812,10 @@ where
         }
         None => settle(&sub, &parts2, opts, slid, &mut runner.certify_s),
     };
-    let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = pass;
-    quality.band = runner.band.report();
+    let mut pass = pass;
+    pass.quality.band = runner.band.report();
     certify_s += runner.certify_s;
-    let alg2 = clock.elapsed().as_secs_f64() - certify_s;
-    let clock = Instant::now();
-    let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
-    // corners of a boundary element, in cyclic order
-    let at = corner_positions(mesh.shape.facet_shape(), p);
-    let corners = |f: &[usize]| at.iter().map(|&c| f[c]).collect();
-    if let Some(mut o) = worst_off_shape(&mesh.nodes, &fine_facets, corners, &parts2, &mesh.part_names, opts.shape_tolerance) {
-        o.after = true;
-        return Err(CurveError::OffShape(Box::new(o)));
-    }
-    // every node of a curved boundary element, the old (fixed) ones too:
-    // they were not moved, so only this shows a vertex off its shape
-    quality.boundary_error = boundary_errors(&mesh, &parts2, opts.samples)?;
-    quality.boundary_node_distance = quality.boundary_error.values().map(|e| e.nodes).fold(moved_distance, f64::max);
-    quality.boundary_sample_distance = quality.boundary_error.values().map(|e| e.samples).fold(0.0, f64::max);
-    quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
-    let seconds = (alg2, certify_s + clock.elapsed().as_secs_f64());
-    Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds, coarse_nodes: sub.coarse_nodes.clone() })
+    Ok((pass, attempts, certify_s, parts2))
 }
 
 /// Whether `auto`, which would pick the multigrid for this many unknowns,
@@ -916,15 +982,7 @@ impl<M, const D: usize> Runner<'_, M, D> {
         if def.t < 1.0 || inverted > 0 {
             return Ok(Err(SlidingLeft { elements: inverted, t: def.t, first_row_drift: drift }));
         }
-        let mesh = CurvedMesh {
-            shape: self.sub.shape,
-            p: self.sub.p,
-            spacing: self.spacing,
-            nodes: def.mesh.mesh.nodes().to_vec(),
-            cells: self.sub.elements.clone(),
-            boundary: self.sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
-            part_names: self.names.to_vec(),
-        };
+        let mesh = fine_mesh(self.sub, self.names, self.spacing, def.mesh.mesh.nodes().to_vec());
         let t0 = Instant::now();
         let (certificates, quality) = certify_mesh(&mesh)?;
         self.certify_s += t0.elapsed().as_secs_f64();
@@ -1068,17 +1126,12 @@ where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
 {
-    use crate::deform::{BoundaryModel, Q1Mesh};
-    let start = sub.refine_mesh().settling(&slid.mesh.nodes, plan.clone());
-    let mut boundary = start.boundary(parts.to_vec())?;
-    let mut nodes = slid.mesh.nodes.clone();
-    boundary.put_back(&mut nodes, 1.0);
+    let (nodes, moved_distance) = snapped_nodes(sub, parts, &slid.mesh.nodes, plan.clone())?;
     let largest_move = largest_distance(&nodes, &slid.mesh.nodes);
-    let moved_distance = boundary.distances(&nodes).iter().map(|d| d.1).fold(0.0, f64::max);
     let t0 = Instant::now();
     let snapped = CurvedMesh { nodes, ..slid.mesh.clone() };
     let mut certificates = slid.certificates.clone();
-    let touched: Vec<usize> = (0..snapped.cells.len()).filter(|&c| snapped.cells[c].iter().any(|&n| snapped.nodes[n] != slid.mesh.nodes[n])).collect();
+    let touched = moved_cells(&snapped, &slid.mesh.nodes);
     let certifiers = Certifiers::new(&snapped.shapes(), snapped.p, snapped.spacing)?;
     let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certifiers.of(snapped.cell_shape(c)).certify(&snapped.cell_coords(c), &CertifyOptions::default())).collect();
     // a snap that shears a thin cell stays valid but ruins it (measured:
@@ -1098,6 +1151,7 @@ where
     }
     // the correction is small: as few steps as the step control allows
     let flow = DeformOptions { steps: 1, max_strain: Some(opts.step_change), ..opts.flow.clone() };
+    let start = sub.refine_mesh().settling(&slid.mesh.nodes, plan.clone());
     let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(start, parts.to_vec(), JacobianField::uniform(), flow)?;
     def.run(&[], |_| {}, |_| {})?;
     let mesh = CurvedMesh { nodes: def.mesh.mesh.nodes().to_vec(), ..snapped };
@@ -1110,9 +1164,110 @@ where
     Ok(Pass { mesh, certificates, quality, stats: slid.stats.clone(), solver: slid.solver.clone(), moved_distance })
 }
 
+/// The subdivided mesh as a curved mesh with `nodes`.
+fn fine_mesh<M, const D: usize>(sub: &Subdivision<M, D>, names: &[String], spacing: Spacing, nodes: Vec<[f64; D]>) -> CurvedMesh<D> {
+    CurvedMesh {
+        shape: sub.shape,
+        p: sub.p,
+        spacing,
+        nodes,
+        cells: sub.elements.clone(),
+        boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
+        part_names: names.to_vec(),
+    }
+}
+
+/// `nodes` with every new node of a curved facet put on its shape at its
+/// place of `plan`, and the largest distance of a moved boundary node to
+/// its shape.
+fn snapped_nodes<M, const D: usize, const N: usize>(sub: &Subdivision<M, D>, parts: &[BoundaryPart<D>], nodes: &[[f64; D]], plan: SettlePlan) -> Result<(Vec<[f64; D]>, f64), CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    use crate::deform::{BoundaryModel, Q1Mesh};
+    let mut boundary = sub.refine_mesh().settling(nodes, plan).boundary(parts.to_vec())?;
+    let mut out = nodes.to_vec();
+    boundary.put_back(&mut out, 1.0);
+    let moved_distance = boundary.distances(&out).iter().map(|d| d.1).fold(0.0, f64::max);
+    Ok((out, moved_distance))
+}
+
+/// The cells of `mesh` with a node not at its place in `before`, in order.
+fn moved_cells<const D: usize>(mesh: &CurvedMesh<D>, before: &[[f64; D]]) -> Vec<usize> {
+    (0..mesh.cells.len()).filter(|&c| mesh.cells[c].iter().any(|&n| mesh.nodes[n] != before[n])).collect()
+}
+
+/// Gmsh's `setOrder` way, tried before Algorithm 2
+/// ([`CurveOptions::snap_first`]): every new node of a curved facet put on
+/// its shape at its fitted place (or, where that is not kept, at equal arc
+/// length), every other node left at its straight place. Kept, with
+/// whether the places were the fitted ones, if every element is certified
+/// valid and each element the snap moved keeps [`SNAP_KEEP`] of its
+/// straight scaled Jacobian; else why not. The elements the snap moves are
+/// certified straight and snapped; the others once, when it is kept.
+fn snap_straight<M, const D: usize, const N: usize>(
+    sub: &Subdivision<M, D>,
+    names: &[String],
+    parts: &[BoundaryPart<D>],
+    opts: &CurveOptions,
+    certify_s: &mut f64,
+) -> Result<Result<(Pass<D>, bool), String>, CurveError>
+where
+    M: Subdividable<D, N>,
+    RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
+{
+    let straight = fine_mesh(sub, names, opts.spacing, sub.fine.nodes().to_vec());
+    let certifiers = Certifiers::new(&straight.shapes(), straight.p, straight.spacing)?;
+    let certify = |mesh: &CurvedMesh<D>, c: usize| certifiers.of(mesh.cell_shape(c)).certify(&mesh.cell_coords(c), &CertifyOptions::default());
+    let mut why = String::new();
+    for fitted in [true, false] {
+        let mut plan = SettlePlan::new(straight.nodes.len());
+        if !fitted {
+            plan.places.fill(Settle::Arc);
+        }
+        let (nodes, moved_distance) = snapped_nodes(sub, parts, &straight.nodes, plan)?;
+        let largest_move = largest_distance(&nodes, &straight.nodes);
+        let snapped = CurvedMesh { nodes, ..straight.clone() };
+        let t0 = Instant::now();
+        let touched = moved_cells(&snapped, &straight.nodes);
+        let pairs: Vec<(Certificate, Certificate)> = touched.par_iter().map(|&c| (certify(&straight, c), certify(&snapped, c))).collect();
+        let lost: Vec<(usize, f64, f64)> = touched
+            .iter()
+            .zip(&pairs)
+            .filter(|(_, (was, now))| !now.valid || (was.valid && now.min_scaled_jacobian < SNAP_KEEP * was.min_scaled_jacobian))
+            .map(|(&c, (was, now))| (c, was.min_scaled_jacobian, if now.valid { now.min_scaled_jacobian } else { f64::NEG_INFINITY }))
+            .collect();
+        if let Some(&(c, was, now)) = lost.iter().min_by(|a, b| (a.2 / a.1).total_cmp(&(b.2 / b.1))) {
+            *certify_s += t0.elapsed().as_secs_f64();
+            let now = if now.is_finite() { format!("{now:.3}") } else { "not certified valid".into() };
+            why = format!(
+                "at {} places, {} of the {} elements it moves fell under {} of their straight scaled Jacobian or were not certified valid; the worst, element {c}: {was:.3} straight, {now} snapped",
+                if fitted { "fitted" } else { "equal arc length" },
+                lost.len(),
+                touched.len(),
+                SNAP_KEEP
+            );
+            continue;
+        }
+        let certificates: Vec<Certificate> = (0..snapped.cells.len()).into_par_iter().map(|c| touched.binary_search(&c).map_or_else(|_| certify(&snapped, c), |k| pairs[k].1)).collect();
+        *certify_s += t0.elapsed().as_secs_f64();
+        let mut quality = summary(&snapped, &certificates);
+        if !quality.invalid_elements.is_empty() {
+            return Ok(Err(format!("{} elements it did not move are not certified valid, the first {}", quality.invalid_elements.len(), quality.invalid_elements[0])));
+        }
+        quality.settling = Settling { largest_move, fitted, ..Default::default() };
+        let pass = Pass { mesh: snapped, certificates, quality, stats: RunStats::default(), solver: Default::default(), moved_distance };
+        return Ok(Ok((pass, fitted)));
+    }
+    Ok(Err(why))
+}
+
 /// How much of an element's scaled Jacobian a snap of the settling pass
-/// must keep; below it the correction is run as a flow.
-const SNAP_KEEP: f64 = 0.9;
+/// must keep; below it the correction is run as a flow. Also what the
+/// snap before Algorithm 2 must keep of the straight element's
+/// ([`CurveOptions::snap_first`]).
+pub const SNAP_KEEP: f64 = 0.9;
 
 /// The largest distance between corresponding points of `a` and `b`.
 fn largest_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> f64 {
