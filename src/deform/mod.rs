@@ -399,21 +399,22 @@ pub enum SolverChoice {
 pub const AUTO_AMG_UNKNOWNS: [usize; 2] = [200_000, 20_000];
 
 /// Up to these many unknowns `auto`'s multigrid CG turns to CG on a
-/// Cholesky factor when it is slow ([`crate::solve::Fallbacks`]), and
-/// `curve` starts with the factor on thin cells; a solve that fails turns
+/// Cholesky factor when it is slow ([`crate::solve::Fallbacks`]); a solve that fails turns
 /// to the factor up to [`DeformOptions::factor_limit`] unknowns if it
 /// fits.
 pub const AUTO_FACTOR_LIMIT: usize = 400_000;
 
-/// `curve`'s `auto` starts Algorithm 2 with CG on a Cholesky factor (up
-/// to [`AUTO_FACTOR_LIMIT`] unknowns) when a coarse cell is thinner than
-/// this: the longest over the shortest distance between two of its
-/// corners. Measured (`curve`, p = 3, whole runs): the extruded cylinder
-/// layers (largest aspect 6.2e4 at 1e-5, 6.2e2 at 1e-3) took 14.6 s
-/// instead of 22.2 s and 5.1 s instead of 7.9 s, the sphere's 1e-4 layer
-/// (3.9e3) 50 s instead of 54 s, the multigrid's first solve failing after
-/// 200 iterations on each; the ball octant (8.3) keeps the multigrid.
-pub const AUTO_FACTOR_ASPECT: f64 = 100.0;
+/// `curve`'s `auto`, when it picks the multigrid, solves Algorithm 2 to
+/// [`THIN_TOLERANCE`] when a coarse cell is thinner than this: the longest
+/// over the shortest distance between two of its corners (the extruded
+/// cylinder layers: 6.2e4 at 1e-5, 6.2e2 at 1e-3; the sphere's 1e-4 layer
+/// 3.9e3; the ball octant 8.3 keeps the usual tolerance).
+pub const THIN_ASPECT: f64 = 100.0;
+
+/// The relative residual Algorithm 2's multigrid CG solves to on cells
+/// thinner than [`THIN_ASPECT`] (`highorder::curve`): there the usual
+/// tolerance's error changes the step control's path.
+pub const THIN_TOLERANCE: f64 = 1e-10;
 
 /// A multigrid solve of more iterations than this makes `auto` turn to
 /// the factor ([`crate::solve::Fallbacks`]) from the next step

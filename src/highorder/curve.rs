@@ -12,7 +12,7 @@ use super::{check_order, Basis1d, HighOrderError, Spacing};
 use crate::mesh::element::Shape;
 use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, subdivide_mixed, RefineMesh, Settle, SettlePlan, Subdividable, Subdivision, ALG2_BAND};
-use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, AUTO_FACTOR_ASPECT, AUTO_FACTOR_LIMIT};
+use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, THIN_ASPECT, THIN_TOLERANCE};
 use crate::mesh::{CurvedBoundary, CurvedMesh, MixedPlaneMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
@@ -729,6 +729,15 @@ where
     if opts.dirichlet {
         parts2 = dirichlet_parts.clone();
     }
+    let band = BandMask::new(sub, &parts2, opts.band);
+    let unknowns = D * band.nodes();
+    let thin = thin_multigrid::<D>(&opts.flow, aspect, unknowns);
+    tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns in the band: the multigrid to {THIN_TOLERANCE:e} on thin cells: {thin}");
+    let mut opts = opts.clone();
+    if thin {
+        opts.flow.tolerance = opts.flow.tolerance.min(THIN_TOLERANCE);
+    }
+    let opts = &opts;
     // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
     // a few thousand nodes, as for Algorithm 1
     let steps: Vec<DeformOptions> = match opts.steps {
@@ -746,11 +755,7 @@ where
     let mut certify_s = 0.0;
     let mut sliding_left = None;
     let watch = Watch::new(sub, &parts2, opts.spacing)?;
-    let band = BandMask::new(sub, &parts2, opts.band);
-    let unknowns = D * band.nodes();
-    let factor = starts_with_factor::<D>(&opts.flow, aspect, unknowns);
-    tracing::debug!("largest cell aspect {aspect:.3e}, {unknowns} unknowns in the band: auto starts with the factor: {factor}");
-    let mut runner = Runner { sub, names, spacing: opts.spacing, factor, band, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
+    let mut runner = Runner { sub, names, spacing: opts.spacing, factor: false, band, certify_s: 0.0, drift: 0.0, drift_limit: if opts.settle { DRIFT_LIMIT } else { f64::INFINITY } };
     let mut attempts = 0;
     let slid = loop {
         let (flow, dirichlet) = schedule[attempts].clone();
@@ -818,19 +823,19 @@ where
     Ok((pass, attempts, certify_s, parts2))
 }
 
-/// Whether `auto`, which would pick the multigrid for this many unknowns,
-/// starts Algorithm 2 with CG on a Cholesky factor instead: on cells
-/// thinner than [`AUTO_FACTOR_ASPECT`]. Before the multigrid relaxed by
-/// lines it needed 10–100× its iterations there; with the lines it was 2×
-/// faster than this start on the extruded cylinder layers at p = 3, but on
-/// the 1e-4 sphere layer its (also certified valid) mesh left Gmsh's
-/// looser minSJ bound ≤ 0 on 24 elements, so the start stays until that is
-/// understood. `auto` turns to the factor after a failed solve anyway when
-/// the system is small enough for it.
-/// Never beyond the factor limit of the options
-/// ([`DeformOptions::factor_limit`]).
-fn starts_with_factor<const D: usize>(flow: &DeformOptions, aspect: f64, unknowns: usize) -> bool {
-    flow.solver.resolved(D, unknowns, flow.factor_limit) == SolverChoice::Auto && aspect > AUTO_FACTOR_ASPECT && unknowns <= AUTO_FACTOR_LIMIT.min(flow.factor_limit)
+/// Whether `auto` picks the multigrid for this many unknowns on cells
+/// thinner than [`THIN_ASPECT`]: then Algorithm 2 solves to
+/// [`THIN_TOLERANCE`]. Why: on such cells CG's residual of 1e-7 leaves an
+/// error in the velocity large enough to change the step control's path
+/// (measured on the 1e-4 sphere layer at p = 2: 3 steps instead of 4 with
+/// one halved, min det J 14 % lower at the patch corners, where Gmsh's
+/// looser minSJ bound then went to −0.062 on 24 elements); at 1e-10 it
+/// takes the path of an exact solve (min det J within 2e-6 of a Cholesky
+/// factor's). Until stop 32 these runs started on a Cholesky factor
+/// instead: 37 s and 2.9 GB on that layer at p = 3, against 5.2 s and
+/// 341 MB.
+fn thin_multigrid<const D: usize>(flow: &DeformOptions, aspect: f64, unknowns: usize) -> bool {
+    flow.solver.resolved(D, unknowns, flow.factor_limit) == SolverChoice::Auto && aspect > THIN_ASPECT
 }
 
 /// The largest ratio, over the cells, of the longest to the shortest
