@@ -1225,7 +1225,6 @@ where
 {
     let straight = fine_mesh(sub, names, opts.spacing, sub.fine.nodes().to_vec());
     let certifiers = Certifiers::new(&straight.shapes(), straight.p, straight.spacing)?;
-    let certify = |mesh: &CurvedMesh<D>, c: usize| certifiers.of(mesh.cell_shape(c)).certify(&mesh.cell_coords(c), &CertifyOptions::default());
     let mut why = String::new();
     for fitted in [true, false] {
         let mut plan = SettlePlan::new(straight.nodes.len());
@@ -1268,9 +1267,8 @@ where
             );
             continue;
         }
-        let certificates: Vec<Certificate> = (0..snapped.cells.len()).into_par_iter().map(|c| certify(&snapped, c)).collect();
+        let (certificates, mut quality) = certify_mesh(&snapped)?;
         *certify_s += t0.elapsed().as_secs_f64();
-        let mut quality = summary(&snapped, &certificates);
         if !quality.invalid_elements.is_empty() {
             return Ok(Err(format!("{} elements it did not move are not certified valid, the first {}", quality.invalid_elements.len(), quality.invalid_elements[0])));
         }
