@@ -21,6 +21,7 @@
 pub mod basis;
 pub mod order;
 pub mod shape;
+pub mod prism;
 pub mod simplex;
 
 pub use shape::{Face, Shape};
