@@ -28,8 +28,8 @@
 
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
-use crate::mesh::element::{nodes_1d, simplex, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, PlaneCell, PlaneMesh, TetMesh, TriMesh};
+use crate::mesh::element::{nodes_1d, prism, simplex, Shape, Spacing};
+use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
@@ -129,11 +129,8 @@ pub struct Subdivision<M, const D: usize> {
 
 impl<M, const D: usize> Subdivision<M, D> {
     /// The kind of coarse element `e`, told by its node count (a mixed
-    /// plane mesh holds quads and triangles; a solid is of one kind).
+    /// mesh holds quads and triangles, or tetrahedra and prisms).
     pub fn element_shape(&self, e: usize) -> Shape {
-        if D != 2 {
-            return self.shape;
-        }
         Shape::with_nodes(D, self.p, self.elements[e].len()).unwrap_or(self.shape)
     }
 
@@ -420,6 +417,135 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
     let shape = coarse.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
     let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
     Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
+}
+
+/// Splits a mixed solid of tetrahedra and prisms as [`subdivide`] does,
+/// every element at its own kind's nodes (a prism's faces carry a
+/// triangle's and a quad's nodes, so it shares them with tetrahedra,
+/// hexes and prisms). Algorithm 2's mesh is of tetrahedra: each of a
+/// prism's p³ sub-prisms is cut into three ([`prism_tets`]), so one P1
+/// system serves both kinds and the elements stay order-p prisms.
+/// Returns, per fine cell, the coarse cell it lies in.
+pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing) -> Result<(Subdivision<TetMesh, 3>, Vec<usize>), SubdivideError> {
+    let t = nodes_1d(p, spacing).map_err(|_| SubdivideError::Order(p))?;
+    let coarse_facets = orient_facets(coarse.cells.iter().map(SolidCell::faces), coarse.faces.clone(), &coarse.part_names)?;
+    let tet_space = simplex::space(Shape::Tetrahedron, p, spacing).map_err(|_| SubdivideError::Order(p))?;
+    let tet_lattice = simplex::lattice(Shape::Tetrahedron, p);
+    let tets = simplex::sub_simplices(Shape::Tetrahedron, p);
+    let prism_space = prism::space(p, spacing).map_err(|_| SubdivideError::Order(p))?;
+    let prism_lattice = prism::lattice(p);
+    let sub_prisms = prism::sub_prisms(p);
+    let mut ids: HashMap<Key, usize> = HashMap::new();
+    let mut nodes: Vec<[f64; 3]> = Vec::new();
+    let (mut elements, mut sub_cells, mut owner) = (Vec::with_capacity(coarse.cells.len()), Vec::new(), Vec::new());
+    for (c, cell) in coarse.cells.iter().enumerate() {
+        let before = sub_cells.len();
+        match cell {
+            SolidCell::Tet(tet) => {
+                let el = simplex_element::<3, 4>(c, tet, &coarse.nodes, (&tet_lattice, &tet_space.nodes, p), &mut ids, &mut nodes);
+                sub_cells.extend(tets.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
+                elements.push(el);
+            }
+            SolidCell::Prism(corners) => {
+                let el = prism_element(c, corners, &coarse.nodes, (&prism_lattice, &prism_space.nodes, p), &mut ids, &mut nodes);
+                for s in &sub_prisms {
+                    sub_cells.extend(prism_tets(s.map(|a| el[a])));
+                }
+                elements.push(el);
+            }
+        }
+        owner.resize(owner.len() + sub_cells.len() - before, c);
+    }
+    let mut b = boundary_places(&coarse.nodes, coarse_facets, &ids, nodes.len(), p, &t, spacing);
+    // the tetrahedra's faces on a quad facet: its sub-quads cut as the
+    // sub-prisms beside them are
+    let fine_facets = b.fine_facets.drain(..).flat_map(|(f, part)| match f.len() {
+        4 => split_face([f[0], f[1], f[2], f[3]]).into_iter().map(|t| (t.to_vec(), part)).collect::<Vec<_>>(),
+        _ => vec![(f, part)],
+    });
+    let fine = TetMesh::assemble(nodes, sub_cells, fine_facets.collect(), coarse.part_names.clone());
+    let shape = coarse.cells.first().map_or(Shape::Prism, |c| c.shape());
+    let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
+    Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
+}
+
+/// The fine nodes of prism `c` with corners `cell` (lattice order of
+/// [`prism`]), made or found by their keys; `(lattice, xi, p)` as for
+/// [`simplex_element`].
+fn prism_element(
+    c: usize,
+    cell: &[usize; 6],
+    at: &[[f64; 3]],
+    (lattice, xi, p): (&[[usize; 3]], &[[f64; 3]], usize),
+    ids: &mut HashMap<Key, usize>,
+    nodes: &mut Vec<[f64; 3]>,
+) -> Vec<usize> {
+    let corners = cell.map(|n| at[n]);
+    lattice
+        .iter()
+        .zip(xi)
+        .map(|(idx, xi)| {
+            *ids.entry(prism_key(c, cell, *idx, p)).or_insert_with(|| {
+                nodes.push(prism_point(&corners, *xi));
+                nodes.len() - 1
+            })
+        })
+        .collect()
+}
+
+/// The point of the linear prism with `corners` at reference `ξ`: the
+/// triangle's barycentric weights times the two layers'.
+fn prism_point(corners: &[[f64; 3]; 6], xi: [f64; 3]) -> [f64; 3] {
+    let tri = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+    let w = |a: usize| tri[a % 3] * if a < 3 { 1.0 - xi[2] } else { xi[2] };
+    std::array::from_fn(|d| (0..6).map(|a| w(a) * corners[a][d]).sum())
+}
+
+/// The key of lattice node `(i, j, k)` of prism `c` with corners `cell`:
+/// on the bottom (k = 0) or top (k = p) triangle the triangle's key;
+/// between them, on a vertical edge its edge's, on a quad face the quad's
+/// (as a hex names it), else inside the cell.
+fn prism_key(c: usize, cell: &[usize; 6], [i, j, k]: [usize; 3], p: usize) -> Key {
+    let bary = [p - i - j, i, j];
+    if k == 0 || k == p {
+        let layer = if k == 0 { &cell[..3] } else { &cell[3..] };
+        return sub_simplex_key(layer, &bary, p, true).unwrap_or(Key::Cell(c, [i, j, k]));
+    }
+    let on: Vec<usize> = (0..3).filter(|&a| bary[a] != 0).collect();
+    match on[..] {
+        [a] => edge_key(cell[a], cell[a + 3], k, p),
+        [a, b] => face_key([cell[a], cell[b], cell[b + 3], cell[a + 3]], bary[b], k, p),
+        _ => Key::Cell(c, [i, j, k]),
+    }
+}
+
+/// The three tetrahedra of a (sub-)prism with corners `v` (Gmsh's order,
+/// positively oriented), each quad face cut along the diagonal through its
+/// smallest node number, so that neighbours cut a shared face alike
+/// (Dompierre, Labbé, Vallet & Camarero, "How to subdivide pyramids,
+/// prisms and hexaedra into tetrahedra", 1999). Every tetrahedron is
+/// oriented like the prism.
+pub fn prism_tets(v: [usize; 6]) -> [[usize; 4]; 3] {
+    // turn the prism (rotations of the triangle; top and bottom swapped
+    // with a mirror, which keeps the orientation) until its smallest
+    // node is vertex 0
+    const TURNS: [[usize; 6]; 6] = [[0, 1, 2, 3, 4, 5], [1, 2, 0, 4, 5, 3], [2, 0, 1, 5, 3, 4], [3, 5, 4, 0, 2, 1], [4, 3, 5, 1, 0, 2], [5, 4, 3, 2, 1, 0]];
+    let low = (0..6).min_by_key(|&a| v[a]).expect("six corners");
+    let r = TURNS[low].map(|a| v[a]);
+    if r[1].min(r[5]) < r[2].min(r[4]) {
+        [[r[0], r[1], r[2], r[5]], [r[0], r[1], r[5], r[4]], [r[0], r[4], r[5], r[3]]]
+    } else {
+        [[r[0], r[1], r[2], r[4]], [r[0], r[4], r[2], r[5]], [r[0], r[4], r[5], r[3]]]
+    }
+}
+
+/// The two triangles of a quad face `q` (cyclic), cut along the diagonal
+/// through its smallest node number ([`prism_tets`]'s rule), oriented
+/// like it.
+fn split_face(q: [usize; 4]) -> [[usize; 3]; 2] {
+    let low = (0..4).min_by_key(|&a| q[a]).expect("four corners");
+    let r: [usize; 4] = std::array::from_fn(|a| q[(low + a) % 4]);
+    [[r[0], r[1], r[2]], [r[0], r[2], r[3]]]
 }
 
 /// The two triangles of a convex Q1 sub-cell (corners counter-clockwise),
@@ -1574,6 +1700,71 @@ mod tests {
                 let (lo, hi) = corners.fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), x| ([lo[0].min(x[0]), lo[1].min(x[1])], [hi[0].max(x[0]), hi[1].max(x[1])]));
                 assert!((0..2).all(|d| lo[d] < mid[d] && mid[d] < hi[d]), "fine cell {f} outside coarse cell {}", owner[f]);
             }
+        }
+    }
+
+    /// A column of two prisms under six tetrahedra (the top layer's
+    /// prisms cut by `prism_tets`), nodes numbered out of order: at every
+    /// order the fine tetrahedra are positive, fill the column, and meet
+    /// face to face (each face held by two tetrahedra or by one and a fine
+    /// boundary facet: the cuts of shared quads agree); the elements keep
+    /// their kinds and node counts.
+    #[test]
+    fn prisms_and_tets_subdivide_into_conforming_tets() {
+        use crate::mesh::{MixedSolidMesh, SolidCell};
+        let order = [7, 2, 11, 4, 0, 9, 5, 1, 10, 3, 8, 6];
+        let mut nodes = vec![[0.0; 3]; 12];
+        for level in 0..3 {
+            for (k, xy) in [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].iter().enumerate() {
+                nodes[order[4 * level + k]] = [xy[0], xy[1], level as f64];
+            }
+        }
+        let at = |level: usize, k: usize| order[4 * level + k];
+        let prism = |l: usize, t: [usize; 3]| [at(l, t[0]), at(l, t[1]), at(l, t[2]), at(l + 1, t[0]), at(l + 1, t[1]), at(l + 1, t[2])];
+        let mut cells = vec![SolidCell::Prism(prism(0, [0, 1, 2])), SolidCell::Prism(prism(0, [0, 2, 3]))];
+        for t in [[0, 1, 2], [0, 2, 3]] {
+            cells.extend(prism_tets(prism(1, t)).map(SolidCell::Tet));
+        }
+        let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
+        for f in cells.iter().flat_map(SolidCell::faces) {
+            let mut k = f.clone();
+            k.sort_unstable();
+            count.entry(k).or_insert((0, f)).0 += 1;
+        }
+        let faces: Vec<(Vec<usize>, usize)> = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
+        assert_eq!(faces.iter().filter(|f| f.0.len() == 4).count(), 4, "the prisms' four side quads");
+        let coarse = MixedSolidMesh { nodes, cells, faces, part_names: vec!["all".into()] };
+        for p in 1..=4 {
+            let (s, owner) = subdivide_mixed_solid(&coarse, p, Spacing::GaussLobatto).unwrap();
+            assert_eq!(s.fine.cells.len(), 2 * 3 * p * p * p + 6 * p * p * p, "p = {p}");
+            assert_eq!(owner.iter().filter(|&&c| c < 2).count(), 6 * p * p * p);
+            let vols: Vec<f64> = s.fine.cells.iter().map(|c| {
+                let x = c.map(|n| s.fine.nodes[n]);
+                let e = |a: usize| std::array::from_fn::<f64, 3, _>(|d| x[a][d] - x[0][d]);
+                crate::numeric::dot(crate::numeric::cross3(e(1), e(2)), e(3)) / 6.0
+            }).collect();
+            assert!(vols.iter().all(|&v| v > 0.0), "p = {p}: a negative fine tetrahedron");
+            assert!((vols.iter().sum::<f64>() - 2.0).abs() < 1e-13, "p = {p}");
+            let mut sorted = s.fine.nodes.clone();
+            sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            assert!(sorted.windows(2).all(|w| dist2(w[0], w[1]) > 1e-20), "p = {p}: two fine nodes at one point");
+            let mut held: HashMap<Vec<usize>, usize> = HashMap::new();
+            for t in &s.fine.cells {
+                for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+                    let mut k = f.map(|a| t[a]).to_vec();
+                    k.sort_unstable();
+                    *held.entry(k).or_default() += 1;
+                }
+            }
+            for f in &s.fine.faces {
+                let mut k = f.nodes.to_vec();
+                k.sort_unstable();
+                *held.entry(k).or_default() += 1;
+            }
+            assert!(held.values().all(|&n| n == 2), "p = {p}: a face held once: the cuts of a shared quad differ");
+            let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
+            assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+            assert_eq!(s.elements[0].len(), Shape::Prism.num_nodes(p));
         }
     }
 

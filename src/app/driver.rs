@@ -14,7 +14,7 @@ use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
-use crate::mesh::{polygon_area, MixedPlaneMesh, PlaneMesh, Point2, Point3, SolidMesh};
+use crate::mesh::{polygon_area, MixedPlaneMesh, MixedSolidMesh, PlaneMesh, Point2, Point3, SolidMesh};
 use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
@@ -808,6 +808,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
         AnyMesh::Triangles(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
         // curve_mixed names tangled cells by their coarse cell
         AnyMesh::Mixed2(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
+        AnyMesh::Mixed3(mesh) => curve_mixed_solid(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
         AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
@@ -830,6 +831,34 @@ where
     geometry.check_carried(names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.part), names.len()), gfile)?;
     let (mesh, shared) = one_group_per_mesh_facet(&mesh, &unbound, gfile)?;
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
+}
+
+/// `curve` on a solid of prisms, alone or with tetrahedra.
+fn curve_mixed_solid(mut mesh: MixedSolidMesh, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
+    let gfile = binding.gfile;
+    if let Some(model) = binding.model {
+        let cad = crate::app::cad::bind::<3>(model, (job.1, &mesh.nodes), (&mesh.faces, &mesh.part_names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
+        (mesh.faces, mesh.part_names) = (cad.facets, cad.names);
+        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some(model)));
+    }
+    let geometry = binding.geometry.expect("a geometry file where there is no model");
+    let names = mesh.part_names.clone();
+    let (parts, unbound) = geometry.parts::<3>(&names, gfile)?;
+    geometry.check_carried(&names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.1), names.len()), gfile)?;
+    let (kept, shared) = one_group_per_facet(mesh.faces.clone(), &names, &unbound, gfile)?;
+    if let Some(kept) = kept {
+        mesh.faces = kept;
+    }
+    curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
+}
+
+impl Curvable<3> for MixedSolidMesh {
+    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
+        crate::highorder::curve::curve_mixed_solid(self, parts, opts, algorithm2(progress))
+    }
+    fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        render_hexes(mesh, values, &options3(look))
+    }
 }
 
 /// A linear plane mesh as `curve` takes it: quads, triangles or both.

@@ -11,9 +11,9 @@
 use super::{check_order, Basis1d, HighOrderError, Spacing};
 use crate::mesh::element::Shape;
 use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
-use crate::refine::{refine_parts, subdivide, subdivide_mixed, RefineMesh, Settle, SettlePlan, Subdividable, Subdivision, ALG2_BAND};
+use crate::refine::{refine_parts, subdivide, subdivide_mixed, subdivide_mixed_solid, RefineMesh, Settle, SettlePlan, Subdividable, Subdivision, ALG2_BAND};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, THIN_ASPECT, THIN_TOLERANCE};
-use crate::mesh::{CurvedBoundary, CurvedMesh, MixedPlaneMesh};
+use crate::mesh::{CurvedBoundary, CurvedMesh, MixedPlaneMesh, MixedSolidMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -419,6 +419,9 @@ fn first_rows<const D: usize>(shape: Shape, elements: &[Vec<usize>], p: usize, o
 /// node numbers: per node of the face, the node `depth` rows in from it
 /// (`depth` = p: across the element) and whether it is a corner.
 fn element_faces<const D: usize>(shape: Shape, p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
+    if shape == Shape::Prism {
+        return prism_faces(p, depth);
+    }
     if shape.is_simplex() {
         return (0..=D).map(|opp| simplex_face_columns(shape, p, opp, depth)).collect();
     }
@@ -428,6 +431,23 @@ fn element_faces<const D: usize>(shape: Shape, p: usize, depth: usize) -> Vec<Ve
         for side in [0, p] {
             out.push(face_columns::<D>(&local, p, d, side, depth).collect());
         }
+    }
+    out
+}
+
+/// [`element_faces`] of an order-p prism (lattice order of
+/// [`crate::mesh::element::prism`]): the bottom and top triangles, each
+/// node with the node `depth` layers in; the three quads, each node with
+/// the node `depth` rows in across the triangle of its layer (as a
+/// triangle's edge has it).
+fn prism_faces(p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
+    let nt = (p + 1) * (p + 2) / 2;
+    let corner = |t: usize| crate::mesh::element::simplex::vertex_nodes(Shape::Triangle, p).contains(&t);
+    let layer = |k: usize, inner: usize| (0..nt).map(|t| (k * nt + t, inner * nt + t, corner(t))).collect();
+    let mut out: Vec<Vec<(usize, usize, bool)>> = vec![layer(0, depth.min(p)), layer(p, p - depth.min(p))];
+    for opp in 0..3 {
+        let columns = simplex_face_columns(Shape::Triangle, p, opp, depth);
+        out.push((0..=p).flat_map(|k| columns.iter().map(move |&(t, inner, v)| (k * nt + t, k * nt + inner, v && (k == 0 || k == p)))).collect());
     }
     out
 }
@@ -633,7 +653,29 @@ pub fn curve_mixed(coarse: &MixedPlaneMesh, parts: &[BoundaryPart<2>], opts: &Cu
     let parts = on_shape_parts(&coarse.nodes, &facets, &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed(coarse, opts.order, opts.spacing)?;
-    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| match e {
+    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
+}
+
+/// [`curve_with_progress`] on a solid of tetrahedra and prisms: the
+/// elements keep their kinds, Algorithm 2 runs on the tetrahedra of
+/// [`subdivide_mixed_solid`]. Cells that tangle are named by the coarse
+/// cell.
+pub fn curve_mixed_solid(coarse: &MixedSolidMesh, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<3>, CurveError> {
+    check_order(opts.order)?;
+    let bad = coarse.invalid_cells();
+    if !bad.is_empty() {
+        return Err(CurveError::InvalidCoarse(bad));
+    }
+    let parts = on_shape_parts(&coarse.nodes, &coarse.faces, &coarse.part_names, parts, opts)?;
+    let clock = Instant::now();
+    let (sub, owner) = subdivide_mixed_solid(coarse, opts.order, opts.spacing)?;
+    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
+}
+
+/// A tangle of Algorithm 2 named by the coarse cells (`owner` of each
+/// fine cell) of a mixed mesh.
+fn by_owner(e: CurveError, owner: &[usize]) -> CurveError {
+    match e {
         CurveError::Deform(DeformError::Tangled { t, dt, cells }) => {
             let mut cells: Vec<usize> = cells.iter().map(|&c| owner[c]).collect();
             cells.sort_unstable();
@@ -641,7 +683,7 @@ pub fn curve_mixed(coarse: &MixedPlaneMesh, parts: &[BoundaryPart<2>], opts: &Cu
             CurveError::Deform(DeformError::Tangled { t, dt, cells })
         }
         e => e,
-    })
+    }
 }
 
 /// The parts of Algorithm 2 for `parts`, once every boundary facet (its
@@ -694,9 +736,10 @@ where
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
-    // corners of a boundary element, in cyclic order
-    let at = corner_positions(mesh.shape.facet_shape(), p);
-    let corners = |f: &[usize]| at.iter().map(|&c| f[c]).collect();
+    // corners of a boundary element, in cyclic order (by its own kind: a
+    // prism's boundary holds triangles and quads)
+    let facet_kind = |f: &[usize]| Shape::with_nodes(D - 1, p, f.len()).expect("validated facets");
+    let corners = |f: &[usize]| corner_positions(facet_kind(f), p).iter().map(|&c| f[c]).collect();
     if let Some(mut o) = worst_off_shape(&mesh.nodes, &fine_facets, corners, &parts2, &mesh.part_names, opts.shape_tolerance) {
         o.after = true;
         return Err(CurveError::OffShape(Box::new(o)));
@@ -1303,7 +1346,7 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
     // the element's faces, each node with the node across the element
     // per kind of cell, its faces
     let across: HashMap<Shape, Vec<Vec<(usize, usize, bool)>>> = mesh.shapes().into_iter().map(|s| (s, element_faces::<D>(s, p, p))).collect();
-    let facet_corners = corner_positions(mesh.shape.facet_shape(), p);
+    let facet_corners = |b: &CurvedBoundary| corner_positions(mesh.facet_shape(b), p);
     // every element face by its sorted corner nodes: (element, face)
     let mut faces: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
     for (e, el) in mesh.cells.iter().enumerate() {
@@ -1316,7 +1359,7 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
     let mut out = BTreeMap::new();
     for b in &mesh.boundary {
         let Some(PartKind::Move { .. }) = parts.get(b.part).map(|q| &q.kind) else { continue };
-        let grid_corners = facet_corners.iter().map(|&c| b.nodes[c]).collect();
+        let grid_corners = facet_corners(b).iter().map(|&c| b.nodes[c]).collect();
         let Some(&(e, f)) = faces.get(&corners_key(grid_corners)) else { continue };
         let mut worst = FirstLayer::default();
         // each face node and the node across the cell from it
@@ -1391,10 +1434,13 @@ fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: 
 /// `samples` points per direction of each boundary element to the shape.
 fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<Vec<f64>, HighOrderError> {
     let m = samples.max(2);
-    let weights = facet_sample_weights(mesh.shape.facet_shape(), mesh.p, mesh.spacing, m)?;
+    // per kind of boundary element (a prism's boundary holds two)
+    let kinds: Vec<Shape> = mesh.shapes().iter().flat_map(|s| s.facets().iter().map(|f| f.0)).collect();
+    let weights: Vec<(usize, Vec<Vec<f64>>)> = kinds.into_iter().map(|k| Ok((k.num_nodes(mesh.p), facet_sample_weights(k, mesh.p, mesh.spacing, m)?))).collect::<Result<_, HighOrderError>>()?;
     Ok(per_part(mesh, parts, |b, target| {
         let mut worst = 0.0f64;
-        for w in &weights {
+        let of_kind = &weights.iter().find(|w| w.0 == b.nodes.len()).expect("validated facets").1;
+        for w in of_kind {
             let mut x = [0.0; D];
             for (&wi, &node) in w.iter().zip(&b.nodes) {
                 for d in 0..D {

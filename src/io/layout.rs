@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use thiserror::Error;
 
-use crate::mesh::element::simplex;
+use crate::mesh::element::{prism, simplex};
 use crate::mesh::CurvedMesh;
 
 /// Name of the physical group that holds all cells of a mesh the crate
@@ -189,7 +189,7 @@ impl Layout {
         let (p, nb) = (mesh.p, mesh.boundary.len());
         let facets = mesh.boundary.iter().enumerate().filter(|(_, b)| b.part < k);
         let mut elements: Vec<Element> = facets
-            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: mesh.shape.facet_shape(), order: p, nodes: b.nodes.clone() })
+            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: mesh.facet_shape(b), order: p, nodes: b.nodes.clone() })
             .collect();
         let cells = mesh.cells.iter().enumerate();
         elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.cell_shape(c), order: p, nodes: n.clone() }));
@@ -530,6 +530,9 @@ fn on_input_curves(elements: &[Element], entity: &mut [Option<(usize, i64)>], of
 /// for a simplex.
 fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
     let d = shape.dim();
+    if shape == Shape::Prism {
+        return prism::vertex_nodes(p).to_vec();
+    }
     if shape.is_simplex() && d >= 2 {
         return simplex::vertex_nodes(shape, p);
     }
@@ -549,6 +552,9 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> 
     }
     if dim == d {
         return vec![(shape, (0..shape.num_nodes(p)).collect())];
+    }
+    if shape == Shape::Prism {
+        return prism_sub_elements(p, dim);
     }
     if shape.is_simplex() {
         return match dim {
@@ -572,6 +578,29 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> 
         }
     }
     out
+}
+
+/// [`sub_elements`] of an order-`p` prism (dimension 1 or 2): each edge
+/// from its first vertex, each face on its loop ([`Shape::faces`]) — a
+/// triangle in lattice order, a quad in tensor order from its first
+/// corner towards its second. The faces are flat in the lattice's
+/// integer coordinates, so every node is a combination of the corners.
+fn prism_sub_elements(p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> {
+    let tri = [[0, 0], [p, 0], [0, p]];
+    let v = |a: usize| [tri[a % 3][0] as isize, tri[a % 3][1] as isize, if a < 3 { 0 } else { p as isize }];
+    // the lattice node at a + (s (b − a) + t (c − a)) / p
+    let at = |a: usize, b: usize, c: usize, s: usize, t: usize| {
+        let x: [isize; 3] = std::array::from_fn(|d| v(a)[d] + (s as isize * (v(b)[d] - v(a)[d]) + t as isize * (v(c)[d] - v(a)[d])) / p as isize);
+        prism::lattice_index(p, x.map(|y| y as usize))
+    };
+    if dim == 1 {
+        return Shape::Prism.edges().iter().map(|&[a, b]| (Shape::Line, (0..=p).map(|s| at(a, b, a, s, 0)).collect())).collect();
+    }
+    let face = |&(kind, l): &(Shape, &[usize])| match kind {
+        Shape::Triangle => (kind, simplex::lattice(Shape::Triangle, p).into_iter().map(|[s, t, _]| at(l[0], l[1], l[2], s, t)).collect()),
+        _ => (kind, (0..=p).flat_map(|t| (0..=p).map(move |s| (s, t))).map(|(s, t)| at(l[0], l[1], l[3], s, t)).collect()),
+    };
+    Shape::Prism.faces().iter().map(face).collect()
 }
 
 /// What [`SubElements::new`] looks up per cell of one kind, computed once
@@ -623,10 +652,9 @@ impl SubElements {
                 by_corners.insert(key, nodes());
             }
         };
-        let facet = mesh.shape.facet_shape();
         for b in &mesh.boundary {
             // a 3D boundary of triangles and quads is told apart by node count
-            let shape = Shape::with_nodes(D - 1, mesh.p, b.nodes.len()).unwrap_or(facet);
+            let shape = mesh.facet_shape(b);
             let mut key: Vec<usize> = corner_indices(shape, mesh.p).iter().map(|&c| b.nodes[c]).collect();
             key.sort_unstable();
             keep(key, &|| b.nodes.clone(), true);
@@ -874,6 +902,45 @@ pub mod tests {
         // the face z = p: nodes 18..27
         assert!(faces.contains(&(18..27).collect::<Vec<_>>()));
         assert_eq!(corner_indices(Shape::Quadrilateral, 3), vec![0, 3, 12, 15]);
+    }
+
+    /// A prism's 9 edges and 5 faces hold the lattice nodes the reference
+    /// coordinates put on them, in the order asked (each from its loop's
+    /// first corner), and every node on the boundary is on some face.
+    #[test]
+    fn sub_elements_of_a_prism_are_its_9_edges_and_5_faces() {
+        for p in 1..=4 {
+            let x = prism::prism_nodes(p, crate::mesh::element::Spacing::Equispaced).unwrap();
+            let edges = sub_elements(Shape::Prism, p, 1);
+            let faces = sub_elements(Shape::Prism, p, 2);
+            assert_eq!((edges.len(), faces.len()), (9, 5));
+            let corners = corner_indices(Shape::Prism, p);
+            for (k, &c) in corners.iter().enumerate() {
+                assert_eq!(x[c], Shape::Prism.vertices()[k]);
+            }
+            for ((_, e), [a, b]) in edges.iter().zip(Shape::Prism.edges()) {
+                let (va, vb) = (Shape::Prism.vertices()[*a], Shape::Prism.vertices()[*b]);
+                for (s, &n) in e.iter().enumerate() {
+                    let want: [f64; 3] = std::array::from_fn(|d| va[d] + (vb[d] - va[d]) * s as f64 / p as f64);
+                    assert!((0..3).all(|d| (x[n][d] - want[d]).abs() < 1e-15), "p = {p}: edge {a}-{b} node {s}");
+                }
+            }
+            let mut on_face = vec![false; x.len()];
+            for ((kind, f), (want_kind, l)) in faces.iter().zip(Shape::Prism.faces()) {
+                assert_eq!(kind, want_kind);
+                assert_eq!(f.len(), kind.num_nodes(p));
+                assert_eq!((f[0], f[p]), (corners[l[0]], corners[l[1]]), "p = {p}: face {l:?} starts at its first corner towards its second");
+                // every node of the face lies in the face's plane
+                let v = |k: usize| Shape::Prism.vertices()[l[k]];
+                let normal = crate::numeric::cross3(std::array::from_fn(|d| v(1)[d] - v(0)[d]), std::array::from_fn(|d| v(2)[d] - v(0)[d]));
+                for &n in f {
+                    assert!(crate::numeric::dot(normal, std::array::from_fn(|d| x[n][d] - v(0)[d])).abs() < 1e-15);
+                    on_face[n] = true;
+                }
+            }
+            let inside = x.iter().filter(|y| y[0] > 1e-12 && y[1] > 1e-12 && y[0] + y[1] < 1.0 - 1e-12 && y[2] > 1e-12 && y[2] < 1.0 - 1e-12).count();
+            assert_eq!(on_face.iter().filter(|&&b| b).count(), x.len() - inside, "p = {p}");
+        }
     }
 
     #[test]

@@ -83,6 +83,97 @@ impl MixedPlaneMesh {
     }
 }
 
+/// One linear cell of a mixed solid mesh, vertices in Gmsh's order
+/// ([`Shape::vertices`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SolidCell {
+    /// A linear tetrahedron.
+    Tet([usize; 4]),
+    /// A linear prism: the bottom triangle, then the top one above it.
+    Prism([usize; 6]),
+}
+
+impl SolidCell {
+    /// The vertices.
+    pub fn nodes(&self) -> &[usize] {
+        match self {
+            SolidCell::Tet(c) => c,
+            SolidCell::Prism(c) => c,
+        }
+    }
+
+    /// The reference shape.
+    pub fn shape(&self) -> Shape {
+        match self {
+            SolidCell::Tet(_) => Shape::Tetrahedron,
+            SolidCell::Prism(_) => Shape::Prism,
+        }
+    }
+
+    /// The outward faces, each in cyclic order ([`Shape::faces`]).
+    pub fn faces(&self) -> Vec<Vec<usize>> {
+        let n = self.nodes();
+        self.shape().faces().iter().map(|(_, f)| f.iter().map(|&k| n[k]).collect()).collect()
+    }
+
+    /// det J of the linear map at each vertex (the triple product of the
+    /// reference axes' images there): a prism's det J is not constant,
+    /// and the corners are where a flat or twisted linear cell fails.
+    pub fn corner_jacobians(&self, at: &[[f64; 3]]) -> Vec<f64> {
+        let x = |k: usize| at[self.nodes()[k]];
+        let e = |a: usize, b: usize| std::array::from_fn::<f64, 3, _>(|d| x(b)[d] - x(a)[d]);
+        match self {
+            SolidCell::Tet(_) => vec![triple(e(0, 1), e(0, 2), e(0, 3))],
+            SolidCell::Prism(_) => (0..6)
+                .map(|v| {
+                    // ∂/∂ξ and ∂/∂η along the triangle of v's layer, ∂/∂ζ along
+                    // the vertical edge through v
+                    let o = 3 * (v / 3);
+                    triple(e(o, o + 1), e(o, o + 2), e(v % 3, v % 3 + 3))
+                })
+                .collect(),
+        }
+    }
+}
+
+fn triple(u: [f64; 3], v: [f64; 3], w: [f64; 3]) -> f64 {
+    u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])
+}
+
+impl AsRef<[usize]> for SolidCell {
+    fn as_ref(&self) -> &[usize] {
+        self.nodes()
+    }
+}
+
+/// A linear solid mesh of tetrahedra and prisms (prism layers on walls,
+/// tetrahedra outside) with named boundary parts. Cells keep the file's
+/// order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MixedSolidMesh {
+    /// Node coordinates.
+    pub nodes: Vec<super::Point3>,
+    /// Cells in the file's order.
+    pub cells: Vec<SolidCell>,
+    /// Boundary faces (triangles and quads, in cyclic order) with their
+    /// part.
+    pub faces: Vec<(Vec<usize>, usize)>,
+    /// Names of the boundary parts.
+    pub part_names: Vec<String>,
+}
+
+impl MixedSolidMesh {
+    /// How many cells are of `shape`.
+    pub fn count(&self, shape: Shape) -> usize {
+        self.cells.iter().filter(|c| c.shape() == shape).count()
+    }
+
+    /// The cells with det J ≤ 0 at a vertex.
+    pub fn invalid_cells(&self) -> Vec<usize> {
+        (0..self.cells.len()).filter(|&c| self.cells[c].corner_jacobians(&self.nodes).iter().any(|&j| j <= 0.0)).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -104,5 +195,26 @@ mod tests {
         assert_eq!(m.orient_counter_clockwise(), 2);
         assert_eq!(m.cells, vec![PlaneCell::Quad([0, 1, 4, 3]), PlaneCell::Triangle([1, 2, 5]), PlaneCell::Triangle([1, 5, 4])]);
         assert_eq!((m.count(Shape::Quadrilateral), m.count(Shape::Triangle)), (1, 2));
+    }
+
+    /// The corner Jacobians of a prism are the reference prism's (1 at
+    /// every vertex), scale with the map, and show a folded corner and a
+    /// prism given upside down.
+    #[test]
+    fn prism_corners_show_folds_and_flips() {
+        let at: Vec<[f64; 3]> = Shape::Prism.vertices().to_vec();
+        let prism = SolidCell::Prism([0, 1, 2, 3, 4, 5]);
+        assert_eq!(prism.corner_jacobians(&at), vec![1.0; 6]);
+        let stretched: Vec<[f64; 3]> = at.iter().map(|x| [2.0 * x[0], x[1], 3.0 * x[2]]).collect();
+        assert_eq!(prism.corner_jacobians(&stretched), vec![6.0; 6]);
+        // one top corner pushed below the bottom: that corner folds
+        let mut folded = at.clone();
+        folded[4][2] = -0.5;
+        let j = prism.corner_jacobians(&folded);
+        assert!(j[1] < 0.0 && j[4] < 0.0 && j[0] > 0.0, "{j:?}");
+        let upside_down = SolidCell::Prism([3, 4, 5, 0, 1, 2]);
+        assert!(upside_down.corner_jacobians(&at).iter().all(|&j| j < 0.0));
+        let m = MixedSolidMesh { nodes: folded, cells: vec![prism, SolidCell::Tet([0, 1, 2, 3])], faces: Vec::new(), part_names: Vec::new() };
+        assert_eq!((m.invalid_cells(), m.count(Shape::Prism)), (vec![0], 1));
     }
 }

@@ -12,4 +12,4 @@ pub mod mixed;
 
 pub use curved::{CurvedBoundary, CurvedMesh};
 pub use linear::*;
-pub use mixed::{MixedPlaneMesh, PlaneCell};
+pub use mixed::{MixedPlaneMesh, MixedSolidMesh, PlaneCell, SolidCell};

@@ -15,7 +15,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, MixedPlaneMesh, PlaneCell, PlaneMesh, SolidMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -128,10 +128,10 @@ impl Raw {
         out
     }
 
-    /// The refusal of the first cell block (dimension `dim`): its element
-    /// type is not one `accepted` names.
-    pub fn refused(&self, dim: usize, accepted: &'static str) -> MshError {
-        let b = self.blocks.iter().find(|b| b.kind.dim == dim).expect("a cell block of that dimension");
+    /// The refusal of the first block of `shape`: its element type is not
+    /// one `accepted` names.
+    pub fn refused_shape(&self, shape: Shape, accepted: &'static str) -> MshError {
+        let b = self.blocks.iter().find(|b| b.kind.shape == shape).expect("a block of that shape");
         MshError::UnknownElementType { at: b.at, accepted, element_type: b.element_type }
     }
 
@@ -171,6 +171,29 @@ impl Raw {
             nodes: self.nodes.clone(),
             cells: cells.iter().map(|c| c.2.try_into().expect("one shape of N nodes")).collect(),
             faces: faces.iter().map(|&(nodes, part, _)| BoundaryFace { nodes: nodes.try_into().expect("the cells' face shape"), part }).collect(),
+            part_names,
+        };
+        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+    }
+
+    /// The linear solid of tetrahedra and prisms (boundary triangles and
+    /// quads), cells in tag order, and its cells' element tags.
+    pub fn mixed_solid_mesh(&self) -> Result<(MixedSolidMesh, Vec<u64>), MshError> {
+        self.check(LINEAR[1])?;
+        for b in self.blocks.iter().filter(|b| b.kind.dim == 3 && !matches!(b.kind.shape, Shape::Tetrahedron | Shape::Prism)) {
+            let why = "a mixed solid holds tetrahedra and prisms (prism layers on tetrahedra); hexes and pyramids with them are not curved yet";
+            return Err(MshError::MixedShapes { at: b.at, what: "cells", expected: Shape::Prism, found: b.kind.shape, why });
+        }
+        let cells = self.by_tag(3);
+        let (part_names, faces) = self.boundary(2);
+        let cell = |n: &[usize]| match n.len() {
+            4 => SolidCell::Tet([n[0], n[1], n[2], n[3]]),
+            _ => SolidCell::Prism([n[0], n[1], n[2], n[3], n[4], n[5]]),
+        };
+        let mesh = MixedSolidMesh {
+            nodes: self.nodes.clone(),
+            cells: cells.iter().map(|c| cell(c.2)).collect(),
+            faces: faces.iter().map(|&(nodes, part, _)| (nodes.to_vec(), part)).collect(),
             part_names,
         };
         Ok((mesh, cells.iter().map(|c| c.0).collect()))

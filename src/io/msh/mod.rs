@@ -269,7 +269,8 @@ fn recombine_hint(element_type: i64) -> String {
     }
     match element_type {
         20 | 22 | 24 | 25 => ". Serendipity and incomplete triangles are not read: give `curve` the linear mesh (type 2)".into(),
-        6 | 13 | 18 | 7 | 14 | 19 => ". Prisms and pyramids are not curved yet: deformesh curves triangle and quad meshes in 2D, tetrahedral and hex meshes in 3D".into(),
+        7 | 14 | 19 | 118 => ". Pyramids are not curved yet: deformesh curves triangles and quads in 2D, tetrahedra, hexes and prisms (with tetrahedra) in 3D".into(),
+        18 => ". Type 18 is the 15-node (serendipity) prism: give `curve` the linear mesh (type 6)".into(),
         _ => String::new(),
     }
 }
@@ -357,6 +358,8 @@ pub enum AnyMesh {
     Tetrahedra(TetMesh),
     /// Linear quads and triangles together.
     Mixed2(crate::mesh::MixedPlaneMesh),
+    /// Linear prisms, alone or with tetrahedra.
+    Mixed3(crate::mesh::MixedSolidMesh),
     /// Quads or triangles of order 2..=4.
     Curved2(CurvedMesh<2>),
     /// Hexes or tetrahedra of order 2..=4.
@@ -383,10 +386,12 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
     let raw = read::parse(bytes, if linear_only { LINEAR[1] } else { CURVED[1] })?;
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
-    if top == 3 && !matches!(raw.cell_shape(3), Some(Shape::Hexahedron | Shape::Tetrahedron)) {
-        return Err(raw.refused(3, "3D meshes of hexahedra or tetrahedra; prism and pyramid meshes are not curved yet"));
+    let solids = raw.cell_shapes(3);
+    if top == 3 && order > 1 && solids.contains(&Shape::Prism) {
+        return Err(raw.refused_shape(Shape::Prism, "prisms of order 1 (`curve` places the high-order nodes; `quality` does not read curved prisms yet)"));
     }
     let (mesh, cell_tags) = match (top, order) {
+        (3, 1) if solids.contains(&Shape::Prism) => raw.mixed_solid_mesh().map(|(m, t)| (AnyMesh::Mixed3(m), t))?,
         (3, 1) if raw.cell_shape(3) == Some(Shape::Tetrahedron) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Tetrahedra(m), t))?,
         (3, 1) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
