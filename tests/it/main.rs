@@ -19,6 +19,7 @@ mod kept;
 mod level_sets;
 mod mfem;
 mod msh22;
+mod prisms;
 mod real_programs;
 mod real_programs_hex;
 mod real_programs_highorder;

@@ -128,13 +128,6 @@ impl Raw {
         out
     }
 
-    /// The refusal of the first block of `shape`: its element type is not
-    /// one `accepted` names.
-    pub fn refused_shape(&self, shape: Shape, accepted: &'static str) -> MshError {
-        let b = self.blocks.iter().find(|b| b.kind.shape == shape).expect("a block of that shape");
-        MshError::UnknownElementType { at: b.at, accepted, element_type: b.element_type }
-    }
-
     /// The shape of the cells (dimension `dim`): the first cell block's.
     pub fn cell_shape(&self, dim: usize) -> Option<Shape> {
         self.blocks.iter().find(|b| b.kind.dim == dim).map(|b| b.kind.shape)
@@ -176,14 +169,24 @@ impl Raw {
         Ok((mesh, cells.iter().map(|c| c.0).collect()))
     }
 
+    /// Fails unless every cell of a solid with prisms is a prism or a
+    /// tetrahedron and every boundary element a triangle or a quad.
+    fn solid_kinds(&self) -> Result<(), MshError> {
+        for b in self.blocks.iter().filter(|b| (2..=3).contains(&b.kind.dim)) {
+            let (what, expected) = if b.kind.dim == 3 { ("cells", Shape::Prism) } else { ("boundary elements", Shape::Triangle) };
+            if !matches!((b.kind.dim, b.kind.shape), (3, Shape::Tetrahedron | Shape::Prism) | (2, Shape::Triangle | Shape::Quadrilateral)) {
+                let why = "a solid with prisms holds prisms and tetrahedra (prism layers on tetrahedra), bounded by triangles and quads; hexes with prisms are not curved yet";
+                return Err(MshError::MixedShapes { at: b.at, what, expected, found: b.kind.shape, why });
+            }
+        }
+        Ok(())
+    }
+
     /// The linear solid of tetrahedra and prisms (boundary triangles and
     /// quads), cells in tag order, and its cells' element tags.
     pub fn mixed_solid_mesh(&self) -> Result<(MixedSolidMesh, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
-        for b in self.blocks.iter().filter(|b| b.kind.dim == 3 && !matches!(b.kind.shape, Shape::Tetrahedron | Shape::Prism)) {
-            let why = "a mixed solid holds tetrahedra and prisms (prism layers on tetrahedra); hexes and pyramids with them are not curved yet";
-            return Err(MshError::MixedShapes { at: b.at, what: "cells", expected: Shape::Prism, found: b.kind.shape, why });
-        }
+        self.solid_kinds()?;
         let cells = self.by_tag(3);
         let (part_names, faces) = self.boundary(2);
         let cell = |n: &[usize]| match n.len() {
@@ -215,12 +218,14 @@ impl Raw {
         let shape = first.kind.shape;
         if D == 2 {
             self.plane_kinds()?;
+        } else if self.cell_shapes(D).contains(&Shape::Prism) {
+            self.solid_kinds()?;
         } else {
             self.one_shape(D, shape)?;
         }
-        let face_perm = gmsh_perm(shape.facet_shape(), p);
-        // each cell by its own block's kind (a plane mesh may mix them)
-        let perms: HashMap<Shape, Vec<usize>> = self.cell_shapes(D).into_iter().map(|s| (s, gmsh_perm(s, p))).collect();
+        // each cell and facet by its own block's kind (a plane mesh may mix
+        // quads and triangles, a solid prisms and tetrahedra)
+        let perms: HashMap<Shape, Vec<usize>> = self.cell_shapes(D).into_iter().chain(self.cell_shapes(D - 1)).map(|s| (s, gmsh_perm(s, p))).collect();
         let (part_names, faces) = self.boundary(D - 1);
         let blocks = cells.iter().map(|c| c.1).chain(faces.iter().map(|f| f.2));
         if let Some(b) = blocks.into_iter().find(|b| b.kind.order != p) {
@@ -232,7 +237,7 @@ impl Raw {
             spacing: Spacing::Equispaced,
             nodes: self.nodes.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
             cells: cells.iter().map(|c| from_format(&perms[&c.1.kind.shape], c.2)).collect(),
-            boundary: faces.iter().map(|&(nodes, part, _)| CurvedBoundary { nodes: from_format(&face_perm, nodes), part }).collect(),
+            boundary: faces.iter().map(|&(nodes, part, b)| CurvedBoundary { nodes: from_format(&perms[&b.kind.shape], nodes), part }).collect(),
             part_names,
         };
         Ok((mesh, cells.iter().map(|c| c.0).collect()))

@@ -386,12 +386,8 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
     let raw = read::parse(bytes, if linear_only { LINEAR[1] } else { CURVED[1] })?;
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
-    let solids = raw.cell_shapes(3);
-    if top == 3 && order > 1 && solids.contains(&Shape::Prism) {
-        return Err(raw.refused_shape(Shape::Prism, "prisms of order 1 (`curve` places the high-order nodes; `quality` does not read curved prisms yet)"));
-    }
     let (mesh, cell_tags) = match (top, order) {
-        (3, 1) if solids.contains(&Shape::Prism) => raw.mixed_solid_mesh().map(|(m, t)| (AnyMesh::Mixed3(m), t))?,
+        (3, 1) if raw.cell_shapes(3).contains(&Shape::Prism) => raw.mixed_solid_mesh().map(|(m, t)| (AnyMesh::Mixed3(m), t))?,
         (3, 1) if raw.cell_shape(3) == Some(Shape::Tetrahedron) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Tetrahedra(m), t))?,
         (3, 1) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
