@@ -7,7 +7,7 @@
 
 use super::element::basis::{tensor_map, Basis1d};
 use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
-use super::element::{simplex, Shape};
+use super::element::{prism, simplex, Shape};
 use super::{PlaneMesh, SolidMesh};
 
 /// One boundary element: an order-`p` line (2D meshes) or quad (3D
@@ -158,15 +158,20 @@ impl<const D: usize> CurvedMesh<D> {
     }
 
     /// The kind of cell `c`, told by its node count ([`Shape::with_nodes`]):
-    /// a mixed plane mesh holds triangles and quads. A 3D mesh is of one
-    /// kind, and a count no kind has (which [`Self::validate`] refuses)
-    /// gives `shape` too.
+    /// a mixed mesh holds triangles and quads, or tetrahedra and prisms. A
+    /// count no kind has (which [`Self::validate`] refuses) gives `shape`.
     pub fn cell_shape(&self, c: usize) -> Shape {
         let n = self.cells[c].len();
-        if D != 2 || n == self.shape.num_nodes(self.p) {
+        if n == self.shape.num_nodes(self.p) {
             return self.shape;
         }
         Shape::with_nodes(D, self.p, n).unwrap_or(self.shape)
+    }
+
+    /// The kind of boundary element `b`, told by its node count: a 3D
+    /// boundary of prisms holds triangles and quads.
+    pub fn facet_shape(&self, b: &CurvedBoundary) -> Shape {
+        Shape::with_nodes(D - 1, self.p, b.nodes.len()).unwrap_or(if D == 2 { Shape::Line } else { Shape::Quadrilateral })
     }
 
     /// The kinds of cell the mesh holds, in the order of [`Shape`].
@@ -203,7 +208,7 @@ impl<const D: usize> CurvedMesh<D> {
         if !(2..=3).contains(&D) {
             return Err(format!("{D}D meshes are not supported"));
         }
-        if self.shape.dim() != D || !matches!(self.shape, Shape::Triangle | Shape::Quadrilateral | Shape::Tetrahedron | Shape::Hexahedron) {
+        if self.shape.dim() != D || !matches!(self.shape, Shape::Triangle | Shape::Quadrilateral | Shape::Tetrahedron | Shape::Hexahedron | Shape::Prism) {
             return Err(format!("cells of shape {:?} in a {D}D mesh", self.shape));
         }
         let n = self.nodes.len();
@@ -219,9 +224,9 @@ impl<const D: usize> CurvedMesh<D> {
         }
         let per_cell = self.nodes_per_cell();
         for (c, cell) in self.cells.iter().enumerate() {
-            // a mixed mesh: quads with triangles, in 2D (3D kinds beyond
-            // hexes and tets are not curved yet)
-            let other = if D == 2 { Shape::with_nodes(2, self.p, cell.len()) } else { None };
+            // a mixed mesh: quads with triangles, tetrahedra with prisms
+            // (pyramids are not curved yet)
+            let other = Shape::with_nodes(D, self.p, cell.len()).filter(|&s| s != Shape::Pyramid);
             if cell.len() != per_cell && other.is_none() {
                 return Err(format!(
                     "cell {c} has {} nodes, expected {per_cell}",
@@ -232,10 +237,14 @@ impl<const D: usize> CurvedMesh<D> {
                 return Err(format!("cell {c} refers to a node >= {n}"));
             }
         }
-        let per_face = self.shape.facet_shape().num_nodes(self.p);
+        // the node counts of the cells' faces (a prism's are triangles and quads)
+        let mut counts: Vec<usize> = self.shapes().iter().flat_map(|s| s.facets().iter().map(|f| f.0.num_nodes(self.p))).collect();
+        counts.sort_unstable();
+        counts.dedup();
+        let per_face = counts.iter().map(usize::to_string).collect::<Vec<_>>().join(" or ");
         let word = if D == 2 { "boundary edge" } else { "boundary face" };
         for (e, b) in self.boundary.iter().enumerate() {
-            if b.nodes.len() != per_face || b.nodes.iter().any(|&v| v >= n) {
+            if !counts.contains(&b.nodes.len()) || b.nodes.iter().any(|&v| v >= n) {
                 return Err(format!(
                     "{word} {e} needs {per_face} nodes < {n}, has {:?}",
                     b.nodes
@@ -289,10 +298,25 @@ impl<const D: usize> CurvedMesh<D> {
                 }
             }
         }
+        if self.shapes().contains(&Shape::Prism) {
+            let space = prism::space(self.p, self.spacing).expect("order checked by validate");
+            let equi = prism::prism_nodes(self.p, Spacing::Equispaced).expect("order checked by validate");
+            let (mut values, mut grads) = (vec![0.0; space.nodes.len()], vec![[0.0; 3]; space.nodes.len()]);
+            for cell in (0..self.cells.len()).filter(|&c| self.cell_shape(c) == Shape::Prism).map(|c| &self.cells[c]) {
+                for (a, &v) in cell.iter().enumerate() {
+                    if std::mem::replace(&mut done[v], true) {
+                        continue;
+                    }
+                    space.eval(equi[a], &mut values, &mut grads);
+                    out.nodes[v] = std::array::from_fn(|k| cell.iter().zip(&values).map(|(&w, &b)| b * self.nodes[w][k]).sum());
+                }
+            }
+        }
         let basis = Basis1d::new(self.p, self.spacing).expect("order checked by validate");
         let t = nodes_1d(self.p, Spacing::Equispaced).expect("order checked by validate");
         let n = self.p + 1;
-        for cell in (0..self.cells.len()).filter(|&c| !self.cell_shape(c).is_simplex()).map(|c| &self.cells[c]) {
+        let tensor = |s: Shape| matches!(s, Shape::Quadrilateral | Shape::Hexahedron);
+        for cell in (0..self.cells.len()).filter(|&c| tensor(self.cell_shape(c))).map(|c| &self.cells[c]) {
             let ctrl: Vec<[f64; D]> = cell.iter().map(|&v| self.nodes[v]).collect();
             for (a, &v) in cell.iter().enumerate() {
                 if std::mem::replace(&mut done[v], true) {
