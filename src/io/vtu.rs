@@ -1,5 +1,5 @@
 //! VTK XML unstructured grids (`.vtu`, ASCII) of meshes of any order
-//! (quads and triangles, also mixed, hexes, tetrahedra), with per-cell and
+//! (quads and triangles, also mixed, hexes, tetrahedra, prisms), with per-cell and
 //! per-node fields, for ParaView. One writer
 //! ([`grid_string`]); linear meshes are its order-1 case.
 
@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use super::fmt_f64;
-use crate::mesh::element::{simplex, to_format, vtk_hex_order, vtk_quad_order, Shape, Spacing};
+use crate::mesh::element::{prism, simplex, to_format, vtk_hex_order, vtk_quad_order, Shape, Spacing};
 use crate::mesh::file::write_atomic;
 use crate::mesh::{CurvedMesh, PlaneMesh, SolidMesh};
 
@@ -32,6 +32,10 @@ pub const VTK_TETRA: u8 = 10;
 pub const VTK_LAGRANGE_TRIANGLE: u8 = 69;
 /// VTK's Lagrange tetrahedron of any order.
 pub const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
+/// VTK's linear wedge (prism).
+pub const VTK_WEDGE: u8 = 13;
+/// VTK's Lagrange wedge of any order.
+pub const VTK_LAGRANGE_WEDGE: u8 = 73;
 
 /// Errors of writing VTU files.
 #[derive(Debug, Error)]
@@ -159,8 +163,8 @@ fn write_text(path: &Path, text: &str) -> Result<(), VtuError> {
 /// The cells of a mesh of any order as a VTK XML UnstructuredGrid (ASCII):
 /// Float64 points (z = 0 in 2D), Int64 connectivity and offsets, UInt8
 /// types, one per cell by its own kind (a mixed mesh holds quads and
-/// triangles; [`VTK_QUAD`], [`VTK_TRIANGLE`], [`VTK_HEXAHEDRON`] and
-/// [`VTK_TETRA`] at order 1, else VTK's Lagrange cells in VTK 9's node
+/// triangles; [`VTK_QUAD`], [`VTK_TRIANGLE`], [`VTK_HEXAHEDRON`],
+/// [`VTK_TETRA`] and [`VTK_WEDGE`] at order 1, else VTK's Lagrange cells in VTK 9's node
 /// order, whose order VTK infers from the number of points), one
 /// Float64 CellData array per `cell_data` entry and one 3-component
 /// PointData array per `point_vectors` entry. Nodes are resampled to
@@ -259,10 +263,15 @@ fn validate<const D: usize>(
 
 /// VTK's node order (from the crate's) and cell type of a `shape`
 /// element of order `p`: VTK's linear cells at order 1, its Lagrange
-/// cells above. The table of this format.
+/// cells above. The table of this format. A prism keeps its orientation:
+/// VTK 9's linear and Lagrange wedges both take the bottom triangle
+/// counter-clockwise seen from the top, as Gmsh and we do (module docs of
+/// [`prism`]).
 fn vtk_type(shape: Shape, p: usize) -> (Vec<usize>, u8) {
     let ok = "order checked by validate";
     match (shape, p) {
+        (Shape::Prism, 1) => (prism::vtk_wedge_order(1).expect(ok), VTK_WEDGE),
+        (Shape::Prism, _) => (prism::vtk_wedge_order(p).expect(ok), VTK_LAGRANGE_WEDGE),
         (Shape::Triangle, 1) => (vec![0, 1, 2], VTK_TRIANGLE),
         (Shape::Triangle, _) => (simplex::vtk_triangle_order(p).expect(ok), VTK_LAGRANGE_TRIANGLE),
         (Shape::Tetrahedron, 1) => (vec![0, 1, 2, 3], VTK_TETRA),
@@ -633,6 +642,29 @@ mod tests {
             }
             // VTK's triangle starts at its three vertices: lattice places 0, p, last
             assert_eq!(connectivity[2][..3], [m.cells[2][0], m.cells[2][p], m.cells[2][nt - 1]], "p = {p}");
+        }
+    }
+
+    /// A prism mesh: each cell a wedge, 13 at p = 1 and 73 above, its
+    /// nodes in VTK's order, the six vertices first in our (and Gmsh's)
+    /// vertex order, no mirroring (VTK 9's wedges are oriented like ours;
+    /// checked with VTK in `tests/it/real_programs_highorder.rs`).
+    #[test]
+    fn prisms_are_written_as_vtk_wedges() {
+        use crate::mesh::curved::tests::bend3;
+        use crate::mesh::element::prism::tests::prism_box;
+        for p in 1..=4 {
+            let m = prism_box(p, Spacing::Equispaced, [1, 1, 1], bend3);
+            let text = m.vtu_string(&[]).unwrap();
+            let ty = if p == 1 { VTK_WEDGE } else { VTK_LAGRANGE_WEDGE };
+            assert_eq!(array(&text, "types").concat(), [usize::from(ty); 2], "p = {p}");
+            let n = Shape::Prism.num_nodes(p);
+            assert_eq!(array(&text, "offsets").concat(), [n, 2 * n]);
+            let connectivity = array(&text, "connectivity");
+            for (c, cell) in m.cells.iter().enumerate() {
+                assert_eq!(connectivity[c], to_format(&prism::vtk_wedge_order(p).unwrap(), cell), "p = {p}, cell {c}");
+                assert_eq!(connectivity[c][..6], prism::vertex_nodes(p).map(|a| cell[a]), "p = {p}, cell {c}");
+            }
         }
     }
 

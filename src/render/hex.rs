@@ -1,5 +1,5 @@
-//! The 3D plan: the boundary surface of a mesh of hexahedra or
-//! tetrahedra of any order, each face filled with the colour of its cell's
+//! The 3D plan: the boundary surface of a mesh of hexahedra, tetrahedra or
+//! prisms of any order, each face filled with the colour of its cell's
 //! value and shaded by a light from the camera's upper left, with its
 //! border drawn as the cell edges, a dark silhouette, the colour bar and a
 //! title, as in the 2D pictures.
@@ -9,8 +9,10 @@
 //! triangles, `m = `[`SUBQUADS_PER_ORDER`]` · p` above): a hex face
 //! through the hex map on an `m × m` grid of small quads, a tet face
 //! through its own Lagrange triangle (the face's nodes, the triangle space
-//! of the mesh's spacing) on a triangle grid of `m²` small triangles.
-//! From there on both are the same: pieces shaded by normals interpolated
+//! of the mesh's spacing) on a triangle grid of `m²` small triangles, a
+//! prism's triangle faces the same way and its quad faces through their
+//! own Lagrange quadrilateral on the quad grid. From there on all are the
+//! same: pieces shaded by normals interpolated
 //! from the grid points, edge lines along the border of the whole face, so
 //! the pieces do not show.
 //!
@@ -89,8 +91,8 @@ impl Default for Camera {
 }
 
 /// A plane that cuts the mesh open: cells whose centre (the mean of their
-/// corners, eight of a hex, four of a tet) lies on the side the normal
-/// points to are not drawn.
+/// corners, eight of a hex, four of a tet, six of a prism) lies on the
+/// side the normal points to are not drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClipPlane {
     /// Any point on the plane.
@@ -152,17 +154,18 @@ impl Default for RenderOptions3 {
 }
 
 /// Draws the boundary surface of the 3D mesh `mesh` of hexahedra (tensor
-/// order) or tetrahedra (simplex lattice order), of any order (a linear
-/// [`HexMesh`] is `CurvedMesh::from_hexes`), of the cells kept by the clip
-/// plane if any, as shaded faces coloured by `cell_values` of their cell,
-/// with each face's border drawn along its edges (if `opts.draw_edges`),
-/// plus silhouette, colour bar and title. A face is on the surface when no
-/// other kept cell has a face with the same corner nodes (four of a quad,
-/// three of a triangle); the mesh's tagged `boundary` is not used. Without
-/// `opts.bounds` the picture frames the sampled surface.
+/// order), tetrahedra or prisms (their lattice orders), of any order (a
+/// linear [`HexMesh`] is `CurvedMesh::from_hexes`), of the cells kept by
+/// the clip plane if any, as shaded faces coloured by `cell_values` of
+/// their cell, with each face's border drawn along its edges (if
+/// `opts.draw_edges`), plus silhouette, colour bar and title. A face is on
+/// the surface when no other kept cell has a face with the same corner
+/// nodes (four of a quad, three of a triangle); the mesh's tagged
+/// `boundary` is not used. Without `opts.bounds` the picture frames the
+/// sampled surface.
 ///
 /// Fails, never panics, on the inputs listed in [`crate::render`], and on
-/// cells of another shape (prisms, pyramids) with
+/// cells of another shape (pyramids) with
 /// [`RenderError::InvalidCurvedMesh`].
 ///
 /// [`HexMesh`]: crate::mesh::HexMesh
@@ -182,8 +185,8 @@ pub fn render_hexes(
 struct HexPlan {
     frame: Frame,
     view: View,
-    /// The sample grid of every face.
-    grid: Grid,
+    /// Pieces per side of every face's grid.
+    m: usize,
     /// The surface of the kept cells.
     patches: Vec<Patch>,
 }
@@ -195,17 +198,17 @@ impl HexPlan {
         opts: &RenderOptions3,
     ) -> Result<HexPlan, RenderError> {
         validate(mesh, values)?;
-        if !matches!(mesh.shape, Shape::Hexahedron | Shape::Tetrahedron) {
+        if !matches!(mesh.shape, Shape::Hexahedron | Shape::Tetrahedron | Shape::Prism) {
             let reason = format!("cells of shape {:?} are not drawn in 3D", mesh.shape);
             return Err(RenderError::InvalidCurvedMesh { reason });
         }
         if let Some(clip) = &opts.clip {
             validate_clip(clip)?;
         }
-        let grid = Grid::new(mesh.shape, pieces(mesh.p, SUBQUADS_PER_ORDER));
+        let m = pieces(mesh.p, SUBQUADS_PER_ORDER);
         let corners = Corners::of(mesh);
         let kept = kept_cells(mesh, &corners, opts.clip.as_ref());
-        let patches = surface_patches(mesh, &corners, &kept, grid);
+        let patches = surface_patches(mesh, &corners, &kept, m);
         let framed: Vec<[f64; 3]> = match opts.bounds {
             Some((lo, hi)) => box_corners(lo, hi).to_vec(),
             // The sampled surface, not the nodes: a curved face may bulge
@@ -228,7 +231,7 @@ impl HexPlan {
         Ok(HexPlan {
             frame,
             view,
-            grid,
+            m,
             patches,
         })
     }
@@ -306,9 +309,14 @@ fn kept_cells(mesh: &CurvedMesh<3>, corners: &Corners, clip: Option<&ClipPlane>)
 }
 
 /// A face ready to rasterise: its grid points on the canvas (samples, x
-/// right, y down, depth key), its border segments there and its colour.
+/// right, y down, depth key), its border segments there, its colour and
+/// its grid's pieces.
 struct Projected<'a> {
     patch: &'a Patch,
+    /// The corner indices of the pieces of the face's grid, `per_piece` a
+    /// piece.
+    pieces: &'a [usize],
+    per_piece: usize,
     px: Vec<[f64; 3]>,
     /// The smallest and largest y of `px`.
     rows: (f64, f64),
@@ -325,9 +333,9 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
     let ss = SUPERSAMPLE as f64;
     let (width, height) = ((region[2] * SUPERSAMPLE) as usize, (region[3] * SUPERSAMPLE) as usize);
     let edges = if draw_edges { edge_style(plan) } else { None };
-    // The same for every face: computed once.
-    let (pieces, border) = (plan.grid.pieces(), plan.grid.border());
-    let per_piece = plan.grid.piece_corners();
+    // The same for every face of a grid: computed once per grid.
+    let grids = [Grid::Quad(plan.m), Grid::Tri(plan.m)].map(|g| (g, g.pieces(), g.border()));
+    let of = |g: Grid| grids.iter().find(|x| x.0 == g).expect("faces are sampled on these grids");
     let faces: Vec<Projected> = plan
         .patches
         .par_iter()
@@ -343,7 +351,9 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
                 })
                 .collect::<Option<Vec<[f64; 3]>>>()?;
             let rows = px.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
-            Some(Projected { patch, border: border.iter().map(|&[a, b]| [px[a], px[b]]).collect(), px, rows, base: plan.frame.colour(values[patch.cell]) })
+            let (grid, pieces, border) = of(patch.grid);
+            let border = border.iter().map(|&[a, b]| [px[a], px[b]]).collect();
+            Some(Projected { patch, pieces, per_piece: grid.piece_corners(), border, px, rows, base: plan.frame.colour(values[patch.cell]) })
         })
         .collect();
     let bands = (4 * rayon::current_num_threads()).clamp(1, height.max(1));
@@ -355,7 +365,7 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
                 if !canvas.meets_rows(face.rows.0, face.rows.1) {
                     continue;
                 }
-                for ids in pieces.chunks_exact(per_piece) {
+                for ids in face.pieces.chunks_exact(face.per_piece) {
                     draw_piece(&mut canvas, plan, face, ids, edges);
                 }
             }
@@ -478,9 +488,8 @@ fn nearby_segments(border: &[[[f64; 3]; 2]], piece: &[[f64; 3]], reach: f64) -> 
 /// polygon in the world, as in 2D, times the scale, which does not vanish
 /// for faces seen edge-on, as projected areas would in axis views).
 fn edge_style(plan: &HexPlan) -> Option<EdgeStyle> {
-    let corners = plan.grid.corners();
     let sizes = plan.patches.iter().map(|f| {
-        let polygon: Vec<[f64; 3]> = corners.iter().map(|&i| f.points[i]).collect();
+        let polygon: Vec<[f64; 3]> = f.grid.corners().iter().map(|&i| f.points[i]).collect();
         view::polygon_area(&polygon).sqrt()
     });
     let (width, alpha) = plan.frame.edge_style(sizes.collect()).1?;

@@ -2,8 +2,10 @@
 //! Python API: reference node coordinates of every element type, the map
 //! and det J of our written elements at random points, its own Bézier-based
 //! `minDetJac`/`maxDetJac`/`minSJ`) and VTK 9 (its XML reader, the Lagrange
-//! cells' parametric coordinates, `EvaluateLocation`, `PointIndexFromIJK`).
-//! One Python run (`tests/python/check_highorder.py`) serves all checks.
+//! cells' parametric coordinates, `EvaluateLocation`, `PointIndexFromIJK`,
+//! and its own verdicts on the orientation of our prisms: det J,
+//! `vtkCellSizeFilter`, `vtkCellValidator`, the faces' normals). One
+//! Python run (`tests/python/check_highorder.py`) serves all checks.
 //!
 //! The Python interpreter is `$DEFORMESH_PYTHON`, else `.venv/bin/python` in
 //! the crate; `scripts/test.sh` sets the latter up.
@@ -15,7 +17,9 @@ use deformesh::highorder::{
     gmsh_hex_order, gmsh_line_order, gmsh_quad_order, hex_map, quad_map, vtk_hex_order,
     vtk_quad_order, Spacing,
 };
-use deformesh::io::vtu::{VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL, VTK_QUAD};
+use deformesh::io::vtu::{VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON, VTK_LAGRANGE_QUADRILATERAL, VTK_LAGRANGE_WEDGE, VTK_QUAD, VTK_WEDGE};
+use deformesh::mesh::element::prism::{self, gmsh_prism_order, vtk_wedge_order};
+use deformesh::mesh::element::{to_format, Shape};
 use deformesh::mesh::CurvedMesh;
 use deformesh::quality::certify::{certify, Certificate};
 use serde_json::{json, Value};
@@ -72,6 +76,65 @@ fn curved_hexes(p: usize, seed: u64) -> CurvedMesh<3> {
     m
 }
 
+/// Four curved order-`p` prisms (Gauss–Lobatto nodes, resampled by the
+/// writers): the two hexes of a bent brick, each split along the diagonal
+/// of its square (the prism of lattice node `(i, j, k)` takes the hex's
+/// tensor node `(i, j, k)`, the other `(p − i, p − j, k)`: half a turn
+/// about z), randomly perturbed. No boundary elements.
+fn curved_prisms(p: usize, seed: u64) -> CurvedMesh<3> {
+    let hexes = CurvedMesh::<3>::structured(p, Spacing::GaussLobatto, [1, 2, 1], |[x, y, z]| {
+        [x + 0.1 * (2.0 * y).sin(), 1.1 * y + 0.12 * x * z, 0.8 * z - 0.1 * x * x + 0.05 * y]
+    })
+    .unwrap();
+    let q = p + 1;
+    let cells = hexes
+        .cells
+        .iter()
+        .flat_map(|hex| {
+            [false, true].map(|turned| {
+                let at = |i: usize, j: usize, k: usize| if turned { hex[(p - i) + q * (p - j) + q * q * k] } else { hex[i + q * j + q * q * k] };
+                prism::lattice(p).into_iter().map(|[i, j, k]| at(i, j, k)).collect()
+            })
+        })
+        .collect();
+    let mut m = CurvedMesh { shape: Shape::Prism, cells, boundary: vec![], part_names: vec![], ..hexes };
+    let mut s = seed;
+    for x in &mut m.nodes {
+        for c in x.iter_mut() {
+            *c += 0.03 / p as f64 * (rand01(&mut s) - 0.5);
+        }
+    }
+    m
+}
+
+/// `m` mirrored in the plane x = 0: every cell turned inside out.
+fn mirrored(m: &CurvedMesh<3>) -> CurvedMesh<3> {
+    let mut out = m.clone();
+    out.nodes.iter_mut().for_each(|x| x[0] = -x[0]);
+    out
+}
+
+/// Points of the unit triangle × [0, 1] (rejection from the unit cube).
+fn prism_points(seed: u64) -> Vec<[f64; 3]> {
+    let mut s = seed;
+    std::iter::repeat_with(|| std::array::from_fn(|_| rand01(&mut s))).filter(|x: &[f64; 3]| x[0] + x[1] <= 1.0).take(POINTS).collect()
+}
+
+/// Our map of a prism (nodes `ctrl` on `spacing`) and its det J at `xi`.
+fn prism_map(p: usize, spacing: Spacing, ctrl: &[[f64; 3]], xi: [f64; 3]) -> ([f64; 3], f64) {
+    let s = prism::space(p, spacing).unwrap();
+    let (mut v, mut g) = (vec![0.0; s.num_nodes()], vec![[0.0; 3]; s.num_nodes()]);
+    s.eval(xi, &mut v, &mut g);
+    let x = std::array::from_fn(|d| ctrl.iter().zip(&v).map(|(y, w)| w * y[d]).sum());
+    let j: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| ctrl.iter().zip(&g).map(|(y, d)| y[r] * d[c]).sum()));
+    (x, det3(j))
+}
+
+fn det3(j: [[f64; 3]; 3]) -> f64 {
+    j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1]) - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+        + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+}
+
 /// A p = 2 quad with det J > 0 at all nine nodes but < 0 between them
 /// (see `quality::certify` tests).
 fn invalid_quad() -> CurvedMesh<2> {
@@ -95,11 +158,21 @@ struct Fixture {
     quads: Vec<CurvedMesh<2>>,
     hexes: Vec<CurvedMesh<3>>,
     invalid: CurvedMesh<2>,
+    /// Prisms of order 1..4; the report holds them after the invalid quad
+    /// (Gmsh) and after the hexes (VTK), then (VTK) their mirror images.
+    prisms: Vec<CurvedMesh<3>>,
     pts2: Vec<[f64; 2]>,
     pts3: Vec<[f64; 3]>,
+    pts_prism: Vec<[f64; 3]>,
     report: Value,
     _dir: tempfile::TempDir,
 }
+
+/// Where the prisms' reports start: Gmsh's after 4 quads, 4 hexes and the
+/// invalid quad, VTK's after 4 quads and 4 hexes (the mirrored prisms 4
+/// later).
+const GMSH_PRISMS: usize = 9;
+const VTK_PRISMS: usize = 8;
 
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
@@ -108,7 +181,8 @@ fn fixture() -> &'static Fixture {
         let quads: Vec<_> = (1..=4).map(|p| curved_quads(p, 100 + p as u64)).collect();
         let hexes: Vec<_> = (1..=4).map(|p| curved_hexes(p, 200 + p as u64)).collect();
         let invalid = invalid_quad();
-        let (pts2, pts3) = (ref_points::<2>(1), ref_points::<3>(2));
+        let prisms: Vec<_> = (1..=4).map(|p| curved_prisms(p, 300 + p as u64)).collect();
+        let (pts2, pts3, pts_prism) = (ref_points::<2>(1), ref_points::<3>(2), prism_points(3));
         let gm = |v: &[f64]| v.iter().map(|x| 2.0 * x - 1.0).collect::<Vec<_>>();
         let (g2, g3): (Vec<_>, Vec<_>) = (
             pts2.iter().map(|x| gm(x)).collect(),
@@ -134,6 +208,21 @@ fn fixture() -> &'static Fixture {
         let f = file("invalid.msh".into());
         invalid.write_msh(&f).unwrap();
         gmsh_req.push(json!({"file": f, "points": g2}));
+        // Gmsh's prism is the unit triangle × [−1, 1]
+        let gp: Vec<[f64; 3]> = pts_prism.iter().map(|&[x, y, z]| [x, y, 2.0 * z - 1.0]).collect();
+        for (i, m) in prisms.iter().enumerate() {
+            let (f, v) = (file(format!("w{i}.msh")), file(format!("w{i}.vtu")));
+            m.write_msh(&f).unwrap();
+            m.write_vtu(&v, &[]).unwrap();
+            // Gmsh 4.15 has no basis for prisms of order 3 and 4: it only reads those
+            gmsh_req.push(json!({"file": f, "points": gp, "evaluate": m.p <= 2}));
+            vtk_req.push(json!({"file": v, "points": pts_prism}));
+        }
+        for (i, m) in prisms.iter().enumerate() {
+            let v = file(format!("mirrored{i}.vtu"));
+            mirrored(m).write_vtu(&v, &[]).unwrap();
+            vtk_req.push(json!({"file": v, "points": pts_prism}));
+        }
         let req = file("request.json".into());
         std::fs::write(&req, json!({"gmsh": gmsh_req, "vtk": vtk_req}).to_string()).unwrap();
         let report = run_checker("check_highorder.py", &req);
@@ -141,8 +230,10 @@ fn fixture() -> &'static Fixture {
             quads,
             hexes,
             invalid,
+            prisms,
             pts2,
             pts3,
+            pts_prism,
             report,
             _dir: dir,
         }
@@ -367,30 +458,35 @@ fn vtk_orders_are_vtks_own() {
     }
 }
 
+/// The equispaced reference nodes of the order-`p` quad or hex in tensor
+/// order.
+fn tensor_nodes<const D: usize>(p: usize) -> Vec<[f64; D]> {
+    let n = p + 1;
+    (0..n.pow(D as u32)).map(|t| std::array::from_fn(|d| (t / n.pow(d as u32) % n) as f64 / p as f64)).collect()
+}
+
 /// Checks one VTK file report: cell type, the cell's parametric node
-/// coordinates against our order, and VTK's map against ours.
+/// coordinates against our order (`reference`: our equispaced reference
+/// nodes, our order), and VTK's map against ours.
 fn compare_vtk<const D: usize>(
     rep: &Value,
     m: &CurvedMesh<D>,
     pts: &[[f64; D]],
-    cell_type: u8,
-    perm: &[usize],
+    (cell_type, perm, reference): (u8, &[usize], &[[f64; D]]),
     map: impl Fn(&[[f64; D]], [f64; D]) -> [f64; D],
 ) -> f64 {
     let cells = rep["cells"].as_array().unwrap();
     assert_eq!(cells.len(), m.cells.len());
-    let n = m.p + 1;
     let mut worst = 0.0f64;
     for (c, cell) in cells.iter().enumerate() {
         assert_eq!(cell["type"], cell_type);
         assert_eq!(cell["npts"], m.nodes_per_cell());
         let pc = floats(&cell["pcoords"]);
-        for (t, &l) in perm.iter().enumerate() {
+        for ((t, &l), want) in perm.iter().enumerate().zip(reference) {
             for d in 0..D {
-                let want = (t / n.pow(d as u32) % n) as f64 / m.p as f64;
                 assert!(
-                    (pc[3 * l + d] - want).abs() < 1e-12,
-                    "cell {c} tensor {t} local {l}"
+                    (pc[3 * l + d] - want[d]).abs() < 1e-12,
+                    "cell {c} node {t} local {l}"
                 );
             }
         }
@@ -418,8 +514,7 @@ fn vtk_reads_and_maps_our_lagrange_cells_like_we_do() {
             m,
             &f.pts2,
             // order 1 is the linear case, written as linear cells
-            if p == 1 { VTK_QUAD } else { VTK_LAGRANGE_QUADRILATERAL },
-            &perm,
+            (if p == 1 { VTK_QUAD } else { VTK_LAGRANGE_QUADRILATERAL }, &perm, &tensor_nodes(p)),
             map,
         );
         eprintln!("VTK quads p={p}: largest point difference {err:.1e}");
@@ -433,12 +528,96 @@ fn vtk_reads_and_maps_our_lagrange_cells_like_we_do() {
             &f.report["vtk"][4 + i],
             m,
             &f.pts3,
-            if p == 1 { VTK_HEXAHEDRON } else { VTK_LAGRANGE_HEXAHEDRON },
-            &perm,
+            (if p == 1 { VTK_HEXAHEDRON } else { VTK_LAGRANGE_HEXAHEDRON }, &perm, &tensor_nodes(p)),
             map,
         );
         eprintln!("VTK hexes p={p}: largest point difference {err:.1e}");
         assert!(err < 1e-12, "p={p}: {err:e}");
+    }
+}
+
+/// VTK reads our prisms of order 1..4 (Gauss–Lobatto nodes, resampled by
+/// the writer) as wedges (13, then 73) with every node at our place for it,
+/// and maps them as we do. It finds them positively oriented by every
+/// measure it has — its own det J (ours: VTK's wedge is our reference
+/// prism), `vtkCellSizeFilter`'s volume, `vtkCellValidator`'s
+/// orientation bit, the normals of the faces it lists — and their mirror
+/// images inverted by each of them, so the measures do see orientation:
+/// VTK 9 wants a wedge as Gmsh and we orient it, linear or Lagrange.
+#[test]
+fn vtk_reads_our_prisms_positively_oriented_and_maps_them_like_we_do() {
+    let f = fixture();
+    for (i, m) in f.prisms.iter().enumerate() {
+        let p = m.p;
+        let (ty, perm) = (if p == 1 { VTK_WEDGE } else { VTK_LAGRANGE_WEDGE }, vtk_wedge_order(p).unwrap());
+        let reference = prism::prism_nodes(p, Spacing::Equispaced).unwrap();
+        let map = |ctrl: &[[f64; 3]], xi| prism_map(p, m.spacing, ctrl, xi).0;
+        let err = compare_vtk(&f.report["vtk"][VTK_PRISMS + i], m, &f.pts_prism, (ty, &perm, &reference), map);
+        eprintln!("VTK prisms p={p}: largest point difference {err:.1e}");
+        assert!(err < 1e-12, "p={p}: {err:e}");
+        for (mesh, sign) in [(m.clone(), 1.0), (mirrored(m), -1.0)] {
+            let rep = &f.report["vtk"][if sign > 0.0 { VTK_PRISMS } else { VTK_PRISMS + 4 } + i];
+            for (c, cell) in rep["cells"].as_array().unwrap().iter().enumerate() {
+                let what = format!("p={p} {} cell {c}", if sign > 0.0 { "prism" } else { "mirrored prism" });
+                let (volume, state) = (cell["volume"].as_f64().unwrap(), cell["validity"].as_u64().unwrap());
+                let outward: Vec<bool> = cell["faces_outward"].as_array().unwrap().iter().map(|b| b.as_bool().unwrap()).collect();
+                eprintln!("{what}: VTK volume {volume:.4}, validity state {state}, faces outward {outward:?}");
+                assert!(sign * volume > 0.0, "{what}: volume {volume}");
+                // bit 32: FacesAreOrientedIncorrectly
+                assert_eq!(state & 32 != 0, sign < 0.0, "{what}: validity state {state}");
+                assert_eq!(outward, vec![sign > 0.0; 5], "{what}");
+                let ctrl = mesh.cell_coords(c);
+                for (&xi, det) in f.pts_prism.iter().zip(floats(&cell["dets"])) {
+                    let ours = prism_map(p, mesh.spacing, &ctrl, xi).1;
+                    assert!(sign * ours > 0.0 && (det - ours).abs() < 1e-10 * ours.abs(), "{what}: VTK's det J {det}, ours {ours}");
+                }
+            }
+        }
+    }
+}
+
+/// Gmsh reads our prisms of order 1..4 as types 6, 13, 90, 91 with their
+/// nodes in its order. At orders 1 and 2 its map and det J (ours / 2: its
+/// z runs over [−1, 1]) at random points are ours, and its Bézier lower
+/// bound `minDetJac` is positive and below every det J we sample. Gmsh
+/// 4.15 cannot evaluate prisms of order 3 and 4 ("FaceClosureFull not
+/// implemented"): for those the file is checked as Gmsh reads it, and the
+/// node order against Gmsh's own order-3 and -4 prisms in
+/// `tests/it/simplex_orders.rs`.
+#[test]
+fn gmsh_reads_our_prisms_and_maps_them_like_we_do() {
+    let f = fixture();
+    let gp: Vec<[f64; 3]> = f.pts_prism.iter().map(|&[x, y, z]| [x, y, 2.0 * z - 1.0]).collect();
+    for (i, m) in f.prisms.iter().enumerate() {
+        let (p, rep) = (m.p, &f.report["gmsh"][GMSH_PRISMS + i]);
+        let ty = [6, 13, 90, 91][p - 1];
+        assert_eq!(rep["cell_type"], ty);
+        assert_eq!(rep["types"][ty.to_string()], m.cells.len());
+        let tags: Vec<u64> = rep["tags"].as_array().unwrap().iter().map(|t| t.as_u64().unwrap()).collect();
+        // the writer resamples at the equispaced nodes: compare the map there
+        let file = m.to_equispaced();
+        for (e, &tag) in tags.iter().enumerate() {
+            let c = tag as usize - 1; // no boundary elements: cell c is tag c + 1
+            let ctrl = m.cell_coords(c);
+            if p >= 3 {
+                let nodes = floats(&rep["element_nodes"][e]);
+                let ours = to_format(&gmsh_prism_order(p).unwrap(), &file.cell_coords(c));
+                let err = ours.iter().flatten().zip(&nodes).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                assert!(nodes.len() == 3 * ours.len() && err < 1e-12, "p={p} cell {c}: off by {err:e}");
+                continue;
+            }
+            let (coords, dets) = (floats(&rep["coords"][e]), floats(&rep["dets"][e]));
+            let mut lowest = f64::INFINITY;
+            for (k, &xi) in f.pts_prism.iter().enumerate() {
+                let (x, det) = prism_map(p, m.spacing, &ctrl, xi);
+                assert!((0..3).all(|d| (coords[3 * k + d] - x[d]).abs() < 1e-12), "p={p} cell {c} point {:?}: {:?} vs {x:?}", gp[k], &coords[3 * k..3 * k + 3]);
+                assert!((dets[k] - det / 2.0).abs() < 1e-11 * det.abs(), "p={p} cell {c}: det {} vs {}", dets[k], det / 2.0);
+                lowest = lowest.min(det / 2.0);
+            }
+            let gmin = floats(&rep["minDetJac"])[e];
+            eprintln!("prism p={p} cell {c}: Gmsh minDetJac {gmin:.6e}, lowest sampled det J / 2 {lowest:.6e}");
+            assert!(gmin > 0.0 && gmin <= lowest * (1.0 + 1e-12), "p={p} cell {c}");
+        }
     }
 }
 

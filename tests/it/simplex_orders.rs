@@ -1,10 +1,12 @@
-//! Checks the simplex elements and the reference-shape table with the real
-//! programs: Gmsh 4.15 (its Python API: the local node coordinates and the
-//! Lagrange basis of the triangle and tetrahedron types of order 1..4, and
-//! the edge and face tables of a model holding one element of each shape)
-//! and VTK 9 (the parametric coordinates and interpolation functions of
-//! `vtkLagrangeTriangle` / `vtkLagrangeTetra`, the linear cells' points,
-//! edges and faces). One Python run (`tests/python/simplex_orders.py`)
+//! Checks the simplex and prism elements and the reference-shape table with
+//! the real programs: Gmsh 4.15 (its Python API: the local node coordinates
+//! and the Lagrange basis of the triangle and tetrahedron types of order
+//! 1..4 and the prisms of order 1, 2, the nodes of the prism it meshes
+//! itself at order 1..4, and the edge and face tables of a model holding
+//! one element of each shape) and VTK 9 (the parametric coordinates and
+//! interpolation functions of `vtkLagrangeTriangle` / `vtkLagrangeTetra` /
+//! `vtkLagrangeWedge`, the linear cells' points, edges and faces). One
+//! Python run (`tests/python/simplex_orders.py`)
 //! serves all checks; it also builds Warburton's warp & blend nodes its
 //! own way (his `Nodes2D`) for the Gauss–Lobatto triangles.
 //!
@@ -13,6 +15,7 @@
 
 use std::sync::OnceLock;
 
+use deformesh::mesh::element::prism::{self, gmsh_prism_order, vtk_wedge_order};
 use deformesh::mesh::element::simplex::{gmsh_tet_order, gmsh_triangle_order, simplex_nodes, space, vtk_tet_order, vtk_triangle_order};
 use deformesh::mesh::element::{HighOrderError, Shape, Spacing, MAX_ORDER};
 use serde_json::{json, Value};
@@ -42,9 +45,17 @@ fn simplex_points(d: usize, seed: u64) -> Vec<[f64; 3]> {
     out
 }
 
+/// Points of the unit triangle × [0, 1].
+fn prism_points(seed: u64) -> Vec<[f64; 3]> {
+    let mut s = seed;
+    simplex_points(2, seed).into_iter().map(|[x, y, _]| [x, y, rand01(&mut s)]).collect()
+}
+
 struct Fixture {
     /// Per simplex dimension 2, 3: the evaluation points.
     points: [Vec<[f64; 3]>; 2],
+    /// The evaluation points of the prism.
+    prism_points: Vec<[f64; 3]>,
     report: Value,
 }
 
@@ -52,13 +63,15 @@ fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
         let points = [simplex_points(2, 11), simplex_points(3, 12)];
+        let prism_points = prism_points(13);
         let request = json!({
             "points2": points[0].iter().map(|x| [x[0], x[1]]).collect::<Vec<_>>(),
             "points3": points[1],
+            "points_prism": prism_points,
         });
         let out = run_script("simplex_orders.py", &[request.to_string()]);
         let report = serde_json::from_slice(&out).unwrap_or_else(|e| panic!("bad JSON from simplex_orders.py: {e}"));
-        Fixture { points, report }
+        Fixture { points, prism_points, report }
     })
 }
 
@@ -145,6 +158,85 @@ fn gmsh_and_vtk_lagrange_bases_are_ours() {
         }
     }
     eprintln!("Gmsh's and VTK's Lagrange simplex bases and ours: largest difference {worst:.1e}");
+}
+
+/// The MSH types of the prism by order.
+const PRISM_TYPES: [i64; 4] = [6, 13, 90, 91];
+
+/// Asserts that Gmsh's local node `perm[t]` of a prism, at `gmsh[3 l..]`
+/// in Gmsh's reference prism, is at our lattice node `t`, within `tol`.
+fn assert_prism_nodes(gmsh: &[f64], perm: &[usize], p: usize, tol: f64, what: &str) {
+    let ours = prism::prism_nodes(p, Spacing::Equispaced).unwrap();
+    assert_eq!(gmsh.len(), 3 * ours.len(), "{what}");
+    for (x, &l) in ours.iter().zip(perm) {
+        let got = from_gmsh(Shape::Prism, std::array::from_fn(|c| gmsh[3 * l + c]));
+        assert!((0..3).all(|c| (got[c] - x[c]).abs() < tol), "{what}: local node {l} at {got:?}, ours at {x:?}");
+    }
+}
+
+/// Our Gmsh prism order puts every node where Gmsh does: where
+/// `getElementProperties` lists them (types 6, 13; Gmsh 4.15 has no nodal
+/// basis for 90, 91) and where Gmsh's own mesher puts them on a prism it
+/// raises to order 1..4 (types 6, 13, 90, 91). Our VTK order puts every
+/// node at `vtkLagrangeWedge`'s parametric coordinates (VTK's wedge is our
+/// reference prism).
+#[test]
+fn our_prism_orders_put_every_node_where_gmsh_and_vtk_have_it() {
+    let r = &fixture().report;
+    for p in 1..=MAX_ORDER {
+        let (gmsh, vtk) = (gmsh_prism_order(p).unwrap(), vtk_wedge_order(p).unwrap());
+        let meshed = &r["gmsh_meshed"][p.to_string()];
+        assert_eq!(meshed["type"].as_i64(), Some(PRISM_TYPES[p - 1]), "Gmsh meshed another type at order {p}");
+        // the nodes come back through a 3 × 3 solve: exact to rounding
+        assert_prism_nodes(&floats(&meshed["nodes"]), &gmsh, p, 1e-10, &format!("Gmsh's own order-{p} prism"));
+        if p <= 2 {
+            let t = &r["gmsh"][PRISM_TYPES[p - 1].to_string()];
+            assert_eq!((t["dim"].as_u64(), t["order"].as_u64()), (Some(3), Some(p as u64)));
+            assert_prism_nodes(&floats(&t["nodes"]), &gmsh, p, 1e-12, &format!("Gmsh type {}", PRISM_TYPES[p - 1]));
+        }
+        let pc = floats(&r["vtk"]["wedge"][p.to_string()]["pcoords"]);
+        assert_eq!(pc.len(), 3 * Shape::Prism.num_nodes(p), "VTK did not infer order {p} for its wedge");
+        for (x, &l) in prism::prism_nodes(p, Spacing::Equispaced).unwrap().iter().zip(&vtk) {
+            assert_at(&pc, l, 3, *x, &format!("VTK Lagrange wedge of order {p}"));
+        }
+    }
+}
+
+/// VTK's `vtkLagrangeWedge` (p = 1..4) and Gmsh's prisms of order 1, 2
+/// evaluate our equispaced prism basis at random points, function by
+/// function through the permutations (Gmsh's z runs over [−1, 1]: its z
+/// derivatives are half ours).
+#[test]
+fn gmsh_and_vtk_lagrange_prism_bases_are_ours() {
+    let f = fixture();
+    let mut worst = 0.0f64;
+    for p in 1..=MAX_ORDER {
+        let s = prism::space(p, Spacing::Equispaced).unwrap();
+        let n = s.num_nodes();
+        let v = &f.report["vtk"]["wedge"][p.to_string()];
+        let g = &f.report["gmsh"][PRISM_TYPES[p - 1].to_string()];
+        let (gv, gg) = if p <= 2 { (floats(&g["values"]), floats(&g["grads"])) } else { (vec![], vec![]) };
+        let (gperm, vperm) = (gmsh_prism_order(p).unwrap(), vtk_wedge_order(p).unwrap());
+        let (mut val, mut grad) = (vec![0.0; n], vec![[0.0; 3]; n]);
+        for (k, &xi) in f.prism_points.iter().enumerate() {
+            s.eval(xi, &mut val, &mut grad);
+            let (vv, vd) = (floats(&v["values"][k]), floats(&v["derivs"][k]));
+            for t in 0..n {
+                let (gl, vl) = (gperm[t], vperm[t]);
+                let mut diffs = vec![(vv[vl] - val[t]).abs()];
+                diffs.extend((0..3).map(|c| (vd[c * n + vl] - grad[t][c]).abs()));
+                if p <= 2 {
+                    diffs.push((gv[k * n + gl] - val[t]).abs());
+                    let scale = [1.0, 1.0, 0.5];
+                    diffs.extend((0..3).map(|c| (gg[3 * (k * n + gl) + c] - scale[c] * grad[t][c]).abs()));
+                }
+                let err = diffs.into_iter().fold(0.0, f64::max);
+                assert!(err < 1e-11, "prism p={p} point {k} function {t}: off by {err:e}");
+                worst = worst.max(err);
+            }
+        }
+    }
+    eprintln!("Gmsh's and VTK's Lagrange prism bases and ours: largest difference {worst:.1e}");
 }
 
 /// Gmsh's reference coordinates of `shape` in ours (module docs of

@@ -1,11 +1,15 @@
 #!/usr/bin/env python3
-"""Evaluate high-order quad/hex meshes with the real Gmsh and VTK, as JSON.
+"""Evaluate high-order quad/hex/prism meshes with the real Gmsh and VTK, as JSON.
 
 Usage: check_highorder.py REQUEST.json
 
-REQUEST holds {"gmsh": [{"file": F, "points": [[u, v(, w)], ...]}, ...],
+REQUEST holds {"gmsh": [{"file": F, "points": [[u, v(, w)], ...](,
+                         "evaluate": false)}, ...],
                "vtk":  [{"file": F, "points": [[u, v(, w)], ...]}, ...]}
-with Gmsh points on its reference cell [-1,1]^d and VTK points on [0,1]^d.
+with Gmsh points on its reference cell ([-1,1]^d; a prism's: the unit
+triangle x [-1,1]) and VTK points on its parametric cell ([0,1]^d; a
+wedge's: the unit triangle x [0,1]). "evaluate": false asks Gmsh only to
+read the file (Gmsh 4.15 cannot evaluate prisms of order 3 and 4).
 
 Prints one JSON object:
   gmsh_types  {type: {"name", "dim", "order", "nodes": [reference coords of
@@ -15,10 +19,21 @@ Prints one JSON object:
               {dim: [names by tag]}, "cell_type", "tags", "coords": per
               element the physical points (3 per point), "dets": per element
               det J at the points (getJacobians), "minDetJac", "maxDetJac",
-              "minSJ" per element (getElementQualities)}
+              "minSJ" per element (getElementQualities)}; without evaluating,
+              "element_nodes" (per element the coordinates of its nodes in
+              Gmsh's local order, flattened) instead of coords, dets and
+              qualities
   vtk         per request file: {"cells": [{"type", "npts", "pcoords":
               [parametric coords of the cell's points, flattened],
-              "points": [EvaluateLocation at each request point, xyz]}]}
+              "points": [EvaluateLocation at each request point, xyz],
+              and for 3D cells VTK's own verdict on their orientation:
+              "dets": det J of VTK's map at the request points
+              (InterpolateDerivs and the cell's points), "volume":
+              vtkCellSizeFilter's signed volume, "validity":
+              vtkCellValidator's state bits (0 valid, 32 faces oriented
+              incorrectly, ...), "faces_outward": per GetFace face whether
+              the normal of its corner polygon (right-hand rule) points away
+              from the mean of the cell's points}]}
   vtk_ijk     {"quad": {p: [PointIndexFromIJK(i, j) for tensor index]},
                "hex": {p: [...]}} straight from vtkHigherOrder* cells
 """
@@ -26,6 +41,7 @@ import json
 import sys
 
 import gmsh
+import numpy as np
 import vtk
 
 LINE, QUAD, HEX = [1, 8, 26, 27], [3, 10, 36, 37], [5, 12, 92, 93]
@@ -52,19 +68,61 @@ def gmsh_file(req):
     cell_type = [int(t) for t in gmsh.model.mesh.getElementTypes(dim)][0]
     cell_tags, _ = gmsh.model.mesh.getElementsByType(cell_type)
     cell_tags = [int(t) for t in cell_tags]
+    out = {"types": counts, "physical_names": names, "cell_type": cell_type,
+           "tags": cell_tags}
+    if not req.get("evaluate", True):
+        _, node_tags = gmsh.model.mesh.getElementsByType(cell_type)
+        per = len(node_tags) // len(cell_tags)
+        xyz = [gmsh.model.mesh.getNode(t)[0] for t in node_tags]
+        out["element_nodes"] = [[float(c) for x in xyz[per * e:per * (e + 1)] for c in x]
+                                for e in range(len(cell_tags))]
+        return out
     pts = req["points"]
     local = []
     for p in pts:
         local += list(p) + [0.0] * (3 - len(p))
     _, dets, coords = gmsh.model.mesh.getJacobians(cell_type, local)
     n, m = len(cell_tags), len(pts)
-    out = {"types": counts, "physical_names": names, "cell_type": cell_type,
-           "tags": cell_tags,
-           "coords": [[float(c) for c in coords[3 * m * e:3 * m * (e + 1)]] for e in range(n)],
-           "dets": [[float(d) for d in dets[m * e:m * (e + 1)]] for e in range(n)]}
+    out["coords"] = [[float(c) for c in coords[3 * m * e:3 * m * (e + 1)]] for e in range(n)]
+    out["dets"] = [[float(d) for d in dets[m * e:m * (e + 1)]] for e in range(n)]
     for q in ("minDetJac", "maxDetJac", "minSJ"):
         out[q] = [float(v) for v in gmsh.model.mesh.getElementQualities(cell_tags, q)]
     return out
+
+
+def cell_verdicts(grid):
+    """Per cell, VTK's signed volume (vtkCellSizeFilter) and validity state
+    (vtkCellValidator)."""
+    size = vtk.vtkCellSizeFilter()
+    size.SetInputData(grid)
+    size.Update()
+    volume = size.GetOutput().GetCellData().GetArray("Volume")
+    validator = vtk.vtkCellValidator()
+    validator.SetInputData(grid)
+    validator.Update()
+    state = validator.GetOutput().GetCellData().GetArray("ValidityState")
+    cells = range(grid.GetNumberOfCells())
+    return [volume.GetTuple1(c) for c in cells], [int(state.GetTuple1(c)) for c in cells]
+
+
+def orientation(cell, points):
+    """det J of VTK's own map at the parametric points, and whether each of
+    the faces VTK lists turns its right-hand normal away from the cell."""
+    n = cell.GetNumberOfPoints()
+    x = np.array([cell.GetPoints().GetPoint(k) for k in range(n)])
+    dets = []
+    for p in points:
+        d = [0.0] * (3 * n)
+        cell.InterpolateDerivs(list(p), d)
+        dets.append(float(np.linalg.det(np.array(d).reshape(3, n) @ x)))
+    centre = x.mean(axis=0)
+    outward = []
+    for f in range(cell.GetNumberOfFaces()):
+        face = cell.GetFace(f)
+        corners = np.array([face.GetPoints().GetPoint(k) for k in range(face.GetNumberOfEdges())])
+        normal = sum(np.cross(corners[k], corners[(k + 1) % len(corners)]) for k in range(len(corners)))
+        outward.append(bool(normal @ (corners.mean(axis=0) - centre) > 0.0))
+    return dets, outward
 
 
 def vtk_file(req):
@@ -72,6 +130,7 @@ def vtk_file(req):
     reader.SetFileName(req["file"])
     reader.Update()
     grid = reader.GetOutput()
+    volumes, states = cell_verdicts(grid)
     cells = []
     for c in range(grid.GetNumberOfCells()):
         cell = vtk.vtkGenericCell()
@@ -85,8 +144,12 @@ def vtk_file(req):
             w = [0.0] * n
             cell.EvaluateLocation(vtk.reference(0), pcoords, x, w)
             pts += x
-        cells.append({"type": grid.GetCellType(c), "npts": n,
-                      "pcoords": [pc[i] for i in range(3 * n)], "points": pts})
+        out = {"type": grid.GetCellType(c), "npts": n,
+               "pcoords": [pc[i] for i in range(3 * n)], "points": pts}
+        if cell.GetCellDimension() == 3:
+            out["dets"], out["faces_outward"] = orientation(cell, req["points"])
+            out["volume"], out["validity"] = volumes[c], states[c]
+        cells.append(out)
     return {"cells": cells}
 
 

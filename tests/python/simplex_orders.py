@@ -3,16 +3,28 @@
 
 Usage: simplex_orders.py REQUEST
 
-REQUEST is a JSON string {"points2": [[u, v], ...], "points3": [[u, v, w], ...]}:
-points on the unit triangle and tetrahedron (Gmsh's and VTK's reference
-simplex, which is also ours) at which the Lagrange bases are evaluated.
+REQUEST is a JSON string {"points2": [[u, v], ...], "points3": [[u, v, w], ...],
+"points_prism": [[u, v, w], ...]}: points on the unit triangle and tetrahedron
+(Gmsh's and VTK's reference simplex, which is also ours) and on the unit
+triangle x [0, 1] (our prism and VTK's wedge; Gmsh's prism is the triangle x
+[-1, 1], the script maps w to 2 w - 1 for it) at which the Lagrange bases are
+evaluated.
 
 Prints one JSON object:
   gmsh         {type: {"name", "dim", "order", "nodes": local node coordinates
                flattened (dim per node, getElementProperties), "values":
                getBasisFunctions "Lagrange" at the points ([point][function]),
                "grads": "GradLagrange" ([point][function][xyz])}} for the
-               triangles 2, 9, 21, 23 and tetrahedra 4, 11, 29, 30
+               triangles 2, 9, 21, 23, tetrahedra 4, 11, 29, 30 and prisms
+               6, 13 (4.15 has no nodal basis for the prisms 90, 91:
+               "FaceClosureFull not implemented for prisms of order 3")
+  gmsh_meshed  {p: {"type", "nodes": Gmsh's reference coordinates (the
+               unit triangle x [-1, 1]) of the nodes of the one prism Gmsh
+               itself meshes at order p (an extruded triangle, setOrder), in
+               its local order, flattened 3 per node, found from their
+               physical places through the prism's affine map}} for p = 1..4:
+               Gmsh's own placement of its prism nodes, the one source for
+               types 90, 91
   gmsh_shapes  {family: {"dim", "vertices": order-1 node coordinates flattened
                3 per node, "num_nodes": {p: node count} for the orders 1..4
                whose properties Gmsh gives (4.15 has none for prisms of order
@@ -20,10 +32,11 @@ Prints one JSON object:
                getElementFaceNodes (vertex numbers, flattened)}} for Line,
                Triangle, Quadrangle, Tetrahedron, Hexahedron, Prism, Pyramid,
                from a model holding one element of each
-  vtk          {"triangle" | "tetra": {p: {"pcoords": GetParametricCoords
-               flattened 3 per node, "values": InterpolateFunctions per point,
-               "derivs": InterpolateDerivs per point ([direction][function])}}}
-               of vtkLagrangeTriangle / vtkLagrangeTetra, p = 1..4, the order
+  vtk          {"triangle" | "tetra" | "wedge": {p: {"pcoords":
+               GetParametricCoords flattened 3 per node, "values":
+               InterpolateFunctions per point, "derivs": InterpolateDerivs per
+               point ([direction][function])}}} of vtkLagrangeTriangle /
+               vtkLagrangeTetra / vtkLagrangeWedge, p = 1..4, the order
                inferred from the number of points
   vtk_linear   {class: {"pcoords", "edges": [[a, b]], "faces": [[loop]]}} of
                vtkLine, vtkTriangle, vtkQuad, vtkTetra, vtkHexahedron, vtkWedge,
@@ -41,7 +54,7 @@ import gmsh
 import numpy as np
 import vtk
 
-TRIANGLES, TETS = [2, 9, 21, 23], [4, 11, 29, 30]
+TRIANGLES, TETS, PRISMS = [2, 9, 21, 23], [4, 11, 29, 30], [6, 13]
 FAMILIES = {"Line": 1, "Triangle": 2, "Quadrangle": 2, "Tetrahedron": 3,
             "Hexahedron": 3, "Prism": 3, "Pyramid": 3}
 
@@ -53,11 +66,18 @@ def flat(points, dim):
     return out
 
 
+def gmsh_points(request, t, dim):
+    """The request's points of the cell of type t, in Gmsh's reference cell."""
+    if t in PRISMS:
+        return flat([[u, v, 2.0 * w - 1.0] for u, v, w in request["points_prism"]], 3)
+    return flat(request["points2"] if dim == 2 else request["points3"], dim)
+
+
 def gmsh_types(request):
     out = {}
-    for t in TRIANGLES + TETS:
+    for t in TRIANGLES + TETS + PRISMS:
         name, dim, order, nn, coords, _ = gmsh.model.mesh.getElementProperties(t)
-        pts = flat(request["points2"] if dim == 2 else request["points3"], dim)
+        pts = gmsh_points(request, t, dim)
         _, values, _ = gmsh.model.mesh.getBasisFunctions(t, pts, "Lagrange")
         _, grads, _ = gmsh.model.mesh.getBasisFunctions(t, pts, "GradLagrange")
         out[str(t)] = {"name": name, "dim": dim, "order": order,
@@ -107,6 +127,35 @@ def gmsh_shapes():
     return out
 
 
+def gmsh_meshed():
+    """Gmsh's own order-p prism: one straight prism meshed and raised to
+    order p by Gmsh, its nodes taken back to Gmsh's reference prism through
+    the affine map of its six vertices (an extruded triangle's prism is
+    affine). Works where getElementProperties does not (types 90, 91)."""
+    out = {}
+    for p in range(1, 5):
+        gmsh.model.add(f"prism{p}")
+        geo = gmsh.model.geo
+        corners = [geo.addPoint(*x) for x in ((0.1, 0.2, 0.0), (1.3, 0.1, 0.0), (0.4, 1.1, 0.0))]
+        lines = [geo.addLine(corners[k], corners[(k + 1) % 3]) for k in range(3)]
+        base = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+        geo.extrude([(2, base)], 0.2, 0.1, 0.9, numElements=[1], recombine=True)
+        geo.synchronize()
+        for _, curve in gmsh.model.getEntities(1):
+            gmsh.model.mesh.setTransfiniteCurve(curve, 2)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(p)
+        (t,) = gmsh.model.mesh.getElementTypes(3)
+        _, tags = gmsh.model.mesh.getElementsByType(t)
+        x = np.array([gmsh.model.mesh.getNode(n)[0] for n in tags])
+        frame = np.array([x[1] - x[0], x[2] - x[0], x[3] - x[0]]).T
+        local = np.linalg.solve(frame, (x - x[0]).T).T
+        local[:, 2] = 2.0 * local[:, 2] - 1.0
+        out[str(p)] = {"type": int(t), "nodes": [float(c) for c in local.flatten()]}
+        gmsh.model.remove()
+    return out
+
+
 def lagrange_cell(cls, n):
     cell = cls()
     cell.GetPointIds().SetNumberOfIds(n)
@@ -115,14 +164,18 @@ def lagrange_cell(cls, n):
         cell.GetPointIds().SetId(i, i)
         cell.GetPoints().SetPoint(i, 0.0, 0.0, 0.0)
     cell.Initialize()
+    # a wedge does not infer its order from its points by itself
+    if hasattr(cell, "SetUniformOrderFromNumPoints"):
+        cell.SetUniformOrderFromNumPoints(n)
     return cell
 
 
 def vtk_lagrange(request):
-    out = {"triangle": {}, "tetra": {}}
+    out = {"triangle": {}, "tetra": {}, "wedge": {}}
     for key, cls, count, pts in (
             ("triangle", vtk.vtkLagrangeTriangle, lambda p: (p + 1) * (p + 2) // 2, request["points2"]),
-            ("tetra", vtk.vtkLagrangeTetra, lambda p: (p + 1) * (p + 2) * (p + 3) // 6, request["points3"])):
+            ("tetra", vtk.vtkLagrangeTetra, lambda p: (p + 1) * (p + 2) * (p + 3) // 6, request["points3"]),
+            ("wedge", vtk.vtkLagrangeWedge, lambda p: (p + 1) ** 2 * (p + 2) // 2, request["points_prism"])):
         for p in range(1, 5):
             n = count(p)
             cell = lagrange_cell(cls, n)
@@ -209,7 +262,8 @@ def main():
     try:
         # keep stdout clean for the JSON; errors still raise exceptions
         gmsh.option.setNumber("General.Terminal", 0)
-        report = {"gmsh": gmsh_types(request), "gmsh_shapes": gmsh_shapes()}
+        report = {"gmsh": gmsh_types(request), "gmsh_shapes": gmsh_shapes(),
+                  "gmsh_meshed": gmsh_meshed()}
     finally:
         gmsh.finalize()
     report["vtk"] = vtk_lagrange(request)

@@ -2,15 +2,18 @@
 //! the permutation from the crate's node order to Gmsh's local one. Every
 //! reader and writer of the MSH formats asks this table and nothing else.
 
-use crate::mesh::element::{gmsh_hex_order, gmsh_line_order, gmsh_quad_order, simplex, Shape};
+use crate::mesh::element::{gmsh_hex_order, gmsh_line_order, gmsh_quad_order, prism, simplex, Shape};
 
-/// MSH element types per shape, orders 1..=4 (index `p − 1`).
-pub const MSH_TYPES: [(Shape, [i64; 4]); 5] = [
+/// MSH element types per shape, orders 1..=4 (index `p − 1`): Gmsh's
+/// complete Lagrange elements (`MSH_PRI_18`, not the 15-node serendipity
+/// prism 18). Pyramids have no row.
+pub const MSH_TYPES: [(Shape, [i64; 4]); 6] = [
     (Shape::Line, [1, 8, 26, 27]),
     (Shape::Triangle, [2, 9, 21, 23]),
     (Shape::Quadrilateral, [3, 10, 36, 37]),
     (Shape::Tetrahedron, [4, 11, 29, 30]),
     (Shape::Hexahedron, [5, 12, 92, 93]),
+    (Shape::Prism, [6, 13, 90, 91]),
 ];
 
 /// The MSH type of a point.
@@ -34,8 +37,8 @@ pub fn shape_of(t: i64) -> Option<(Shape, usize)> {
 }
 
 /// Gmsh's local order of a `shape` element of order `p`, as a
-/// permutation from the crate's order (tensor order, or the simplex
-/// lattice order): `perm[ours] = Gmsh's local number`.
+/// permutation from the crate's order (tensor order, the simplex lattice
+/// order, or the prism's of [`prism`]): `perm[ours] = Gmsh's local number`.
 ///
 /// # Panics
 /// For a shape or order outside the table (the readers and writers only
@@ -49,7 +52,8 @@ pub fn gmsh_perm(shape: Shape, p: usize) -> Vec<usize> {
         Shape::Hexahedron => gmsh_hex_order(p).expect(ok),
         Shape::Triangle => simplex::gmsh_triangle_order(p).expect(ok),
         Shape::Tetrahedron => simplex::gmsh_tet_order(p).expect(ok),
-        Shape::Prism | Shape::Pyramid => panic!("no MSH row for {shape:?}"),
+        Shape::Prism => prism::gmsh_prism_order(p).expect(ok),
+        Shape::Pyramid => panic!("no MSH row for {shape:?}"),
     }
 }
 
@@ -71,7 +75,9 @@ mod tests {
             }
         }
         assert_eq!(shape_of(15), Some((Shape::Point, 1)));
-        assert_eq!(shape_of(6), None, "prisms have no row yet");
+        assert_eq!(shape_of(7), None, "pyramids have no row");
+        assert_eq!(shape_of(18), None, "nor has the serendipity prism");
+        assert_eq!(msh_type(Shape::Pyramid, 1), None);
         assert_eq!(msh_type(Shape::Triangle, 5), None);
     }
 }

@@ -1,14 +1,16 @@
 //! The surface to draw: faces of kept cells that no other kept cell shares,
 //! each sampled on a grid of points with their normals.
 //!
-//! A hex face is sampled through the hex map on a quad grid, a tet face
-//! through its own Lagrange triangle on a triangle grid; everything after
-//! sampling (lighting, rasterising, edge lines) sees only the [`Grid`]
-//! and the points, whatever the cell.
+//! A hex face is sampled through the hex map on a quad grid; a tet or prism
+//! face through its own Lagrange element (its nodes, and the triangle's or
+//! the quadrilateral's basis on the mesh's spacing) on a triangle or quad
+//! grid; everything after sampling (lighting, rasterising, edge lines) sees
+//! only each face's [`Grid`] and the points, whatever the cell.
 
 use crate::mesh::element::order::HEX_CORNERS;
-use crate::mesh::element::simplex::{self, face_nodes, lattice, lattice_index};
-use crate::mesh::element::Shape;
+use crate::mesh::element::prism;
+use crate::mesh::element::simplex::{self, lattice, lattice_index};
+use crate::mesh::element::{Shape, Spacing};
 use crate::mesh::CurvedMesh;
 use crate::numeric::{add, cross3 as cross, scale, sub};
 use crate::render::basis_table;
@@ -34,10 +36,10 @@ pub(crate) enum Grid {
 }
 
 impl Grid {
-    /// The grid of the faces of `shape` cells (hexahedron or tetrahedron).
-    pub fn new(shape: Shape, m: usize) -> Grid {
-        match shape {
-            Shape::Tetrahedron => Grid::Tri(m),
+    /// The grid of a face of shape `face` (triangle or quadrilateral).
+    pub fn of(face: Shape, m: usize) -> Grid {
+        match face {
+            Shape::Triangle => Grid::Tri(m),
             _ => Grid::Quad(m),
         }
     }
@@ -130,20 +132,21 @@ impl Grid {
 }
 
 /// The corner nodes of every cell: `per_cell` a cell (8 of a hex, 4 of a
-/// tet), in the numbering of the shape's vertices (which the face tables
-/// use).
+/// tet, 6 of a prism), in the numbering of the shape's vertices (which the
+/// face tables use).
 pub(crate) struct Corners {
     pub per_cell: usize,
     pub nodes: Vec<usize>,
 }
 
 impl Corners {
-    /// The corners of the cells of `mesh`, a validated hex (tensor order)
-    /// or tet (lattice order) mesh.
+    /// The corners of the cells of `mesh`, a validated hex (tensor order),
+    /// tet or prism (lattice orders) mesh.
     pub fn of(mesh: &CurvedMesh<3>) -> Corners {
         let p = mesh.p;
         let local: Vec<usize> = match mesh.shape {
             Shape::Tetrahedron => simplex::vertex_nodes(mesh.shape, p),
+            Shape::Prism => prism::vertex_nodes(p).to_vec(),
             _ => {
                 let q = p + 1;
                 HEX_CORNERS
@@ -176,14 +179,14 @@ impl Corners {
 
 /// The faces of `shape` as loops of local corner numbers, counter-clockwise
 /// seen from outside: [`HEX_FACES`] for hexes, the element table's for
-/// tets (whose loops [`face_nodes`] follows).
+/// tets and prisms (whose loops their `face_nodes` follow).
 pub(crate) fn face_loops(shape: Shape) -> Vec<&'static [usize]> {
     match shape {
-        Shape::Tetrahedron => shape.faces().iter().map(|f| f.1).collect(),
-        _ => {
+        Shape::Hexahedron => {
             let table: &'static [[usize; 4]; 6] = &HEX_FACES;
             table.iter().map(|f| f.as_slice()).collect()
         }
+        _ => shape.faces().iter().map(|f| f.1).collect(),
     }
 }
 
@@ -241,10 +244,12 @@ fn key(nodes: impl Iterator<Item = usize>) -> [usize; 4] {
     k
 }
 
-/// One drawn face: the face sampled on the plan's [`Grid`].
+/// One drawn face: the face sampled on its [`Grid`].
 pub(crate) struct Patch {
     /// The cell it belongs to (whose value colours it).
     pub cell: usize,
+    /// The grid it is sampled on: a prism has triangle and quad faces.
+    pub grid: Grid,
     /// World points, in grid order; the grid's border is the face's
     /// border.
     pub points: Vec<[f64; 3]>,
@@ -252,15 +257,15 @@ pub(crate) struct Patch {
     pub normals: Vec<[f64; 3]>,
 }
 
-/// The sampled boundary faces of the kept cells of `mesh` (validated, hex
-/// or tet), in cell order.
+/// The sampled boundary faces of the kept cells of `mesh` (validated, hex,
+/// tet or prism), in cell order, `m` pieces a side.
 pub(crate) fn surface_patches(
     mesh: &CurvedMesh<3>,
     corners: &Corners,
     kept: &[bool],
-    grid: Grid,
+    m: usize,
 ) -> Vec<Patch> {
-    let sampler = Sampler::new(mesh, grid);
+    let sampler = Sampler::new(mesh, m);
     let loops = face_loops(mesh.shape);
     surface_faces(corners, &loops, kept)
         .into_iter()
@@ -268,6 +273,8 @@ pub(crate) fn surface_patches(
             let (points, normals) = sampler.sample(&mesh.cells[face.cell], &mesh.nodes, face.face);
             Patch {
                 cell: face.cell,
+                // a hex's faces, numbered by HEX_FACES, are all quads
+                grid: Grid::of(mesh.shape.faces()[face.face].0, m),
                 points,
                 normals,
             }
@@ -279,30 +286,31 @@ pub(crate) fn surface_patches(
 enum Sampler {
     /// Hex faces through the tensor map: the 1-D basis at `t = k / m`.
     Hex { p: usize, table: Vec<Vec<f64>> },
-    /// Tet faces through their own triangle: each face's nodes (local
-    /// numbers, triangle lattice order), and the triangle basis's values
-    /// and gradients at every grid point, `n` functions a point.
-    Tet {
-        faces: Vec<Vec<usize>>,
-        n: usize,
-        values: Vec<f64>,
-        grads: Vec<[f64; 3]>,
+    /// Tet and prism faces through their own elements: each face's shape
+    /// and nodes (local numbers: a triangle's in lattice order, a quad's in
+    /// tensor order, as `face_nodes` of [`simplex`] and [`prism`] give
+    /// them), the triangle's basis on the triangle grid and the 1-D basis
+    /// at `t = k / m` for the quads.
+    Faces {
+        faces: Vec<(Shape, Vec<usize>)>,
+        triangle: TriangleTable,
+        table: Vec<Vec<f64>>,
     },
 }
 
-impl Sampler {
-    fn new(mesh: &CurvedMesh<3>, grid: Grid) -> Sampler {
-        let (p, m) = (mesh.p, grid.m());
-        if mesh.shape != Shape::Tetrahedron {
-            return Sampler::Hex {
-                p,
-                table: basis_table(p, mesh.spacing, m),
-            };
-        }
-        let space =
-            simplex::space(Shape::Triangle, p, mesh.spacing).expect("order checked by validate");
+/// The order-`p` triangle basis's values and gradients at every point of
+/// the triangle grid `m`, `n` functions a point.
+struct TriangleTable {
+    n: usize,
+    values: Vec<f64>,
+    grads: Vec<[f64; 3]>,
+}
+
+impl TriangleTable {
+    fn new(p: usize, spacing: Spacing, m: usize) -> TriangleTable {
+        let space = simplex::space(Shape::Triangle, p, spacing).expect("order checked by validate");
         let n = space.num_nodes();
-        let points = grid.params();
+        let points = Grid::Tri(m).params();
         let (mut values, mut grads) = (
             vec![0.0; n * points.len()],
             vec![[0.0; 3]; n * points.len()],
@@ -315,14 +323,46 @@ impl Sampler {
                 &mut grads[i * n..(i + 1) * n],
             );
         }
-        let faces = (0..4)
-            .map(|f| face_nodes(Shape::Tetrahedron, p, f))
-            .collect();
-        Sampler::Tet {
+        TriangleTable { n, values, grads }
+    }
+
+    /// The points and unit normals of the Lagrange triangle through
+    /// `nodes` on the grid.
+    fn sample(&self, nodes: &[[f64; 3]]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let n = self.n;
+        let at = |g: usize| {
+            (
+                &self.values[g * n..(g + 1) * n],
+                &self.grads[g * n..(g + 1) * n],
+            )
+        };
+        (0..self.values.len() / n)
+            .map(|g| triangle_point(nodes, at(g)))
+            .unzip()
+    }
+}
+
+impl Sampler {
+    fn new(mesh: &CurvedMesh<3>, m: usize) -> Sampler {
+        let (p, table) = (mesh.p, basis_table(mesh.p, mesh.spacing, m));
+        let faces = match mesh.shape {
+            Shape::Tetrahedron => (0..4)
+                .map(|f| {
+                    (
+                        Shape::Triangle,
+                        simplex::face_nodes(Shape::Tetrahedron, p, f),
+                    )
+                })
+                .collect(),
+            Shape::Prism => (0..5)
+                .map(|f| (Shape::Prism.faces()[f].0, prism::face_nodes(p, f)))
+                .collect(),
+            _ => return Sampler::Hex { p, table },
+        };
+        Sampler::Faces {
             faces,
-            n,
-            values,
-            grads,
+            triangle: TriangleTable::new(p, mesh.spacing, m),
+            table,
         }
     }
 
@@ -340,20 +380,41 @@ impl Sampler {
                 let normals = grid_normals(&points, table.len() - 1);
                 (points, normals)
             }
-            Sampler::Tet {
+            Sampler::Faces {
                 faces,
-                n,
-                values,
-                grads,
+                triangle,
+                table,
             } => {
-                let ids: Vec<[f64; 3]> = faces[f].iter().map(|&a| nodes[cell[a]]).collect();
-                let at = |g: usize| (&values[g * n..(g + 1) * n], &grads[g * n..(g + 1) * n]);
-                (0..values.len() / n)
-                    .map(|g| triangle_point(&ids, at(g)))
-                    .unzip()
+                let (shape, on) = &faces[f];
+                let ids: Vec<[f64; 3]> = on.iter().map(|&a| nodes[cell[a]]).collect();
+                if *shape == Shape::Triangle {
+                    return triangle.sample(&ids);
+                }
+                let points = sample_quad(&ids, table);
+                let normals = grid_normals(&points, table.len() - 1);
+                (points, normals)
             }
         }
     }
+}
+
+/// The Lagrange quadrilateral through `nodes` (tensor order) sampled on the
+/// grid of `table` (rows at `t = k / m`), first axis fastest.
+fn sample_quad(nodes: &[[f64; 3]], table: &[Vec<f64>]) -> Vec<[f64; 3]> {
+    let q = table[0].len();
+    let mut points = Vec::with_capacity(table.len() * table.len());
+    for wl in table {
+        for wk in table {
+            let mut x = [0.0; 3];
+            for (b, &wb) in wl.iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                for (a, &wa) in wk.iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                    x = add(x, scale(wa * wb, nodes[a + q * b]));
+                }
+            }
+            points.push(x);
+        }
+    }
+    points
 }
 
 /// The point of the Lagrange triangle through `nodes` with basis `values`

@@ -1,4 +1,4 @@
-//! Tests that render real hex- and tet-mesh pictures, encode them as PNG,
+//! Tests that render real hex-, tet- and prism-mesh pictures, encode them as PNG,
 //! decode them again and check pixels: colours, shading, positions, hidden
 //! surfaces, clipping, curved faces and errors.
 
@@ -9,6 +9,7 @@ use image::RgbaImage;
 
 use super::view::{self, shade_colour};
 use super::*;
+use crate::mesh::element::prism::tests::prism_box;
 use crate::mesh::element::{simplex, Spacing};
 use crate::mesh::HexMesh;
 use crate::numeric::cross3;
@@ -807,7 +808,8 @@ fn clipping_drops_whole_curved_cells_by_their_corners() {
 fn every_sampled_point_is_finite_and_on_the_face() {
     let mesh = bulged_block(3, [2, 2, 2]);
     let corners = Corners::of(&mesh);
-    let patches = surface_patches(&mesh, &corners, &[true; 8], Grid::Quad(9));
+    let patches = surface_patches(&mesh, &corners, &[true; 8], 9);
+    assert!(patches.iter().all(|f| f.grid == Grid::Quad(9)));
     assert_eq!(patches.len(), 24);
     for f in &patches {
         assert_eq!(f.points.len(), 100);
@@ -1100,7 +1102,7 @@ fn sampled_tet_faces_lie_on_the_surface_with_outward_normals() {
     for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
         let mesh = tet_box(3, spacing, [2, 1, 1], |x| bulge(scale(0.5, x)));
         let corners = Corners::of(&mesh);
-        let patches = surface_patches(&mesh, &corners, &[true; 12], Grid::Tri(9));
+        let patches = surface_patches(&mesh, &corners, &[true; 12], 9);
         assert_eq!(patches.len(), 20);
         for f in &patches {
             assert_eq!((f.points.len(), f.normals.len()), (55, 55));
@@ -1143,7 +1145,7 @@ fn tets_of_every_order_and_spacing_are_drawn() {
             let values: Vec<f64> = (0..12).map(|c| 0.9 + 0.02 * c as f64).collect();
             let (img, plan) = render_decoded(&mesh, &values, &opts(Camera::default()));
             let m = if p == 1 { 1 } else { SUBQUADS_PER_ORDER * p };
-            assert_eq!(plan.grid, Grid::Tri(m));
+            assert!(plan.patches.iter().all(|f| f.grid == Grid::Tri(m)));
             assert_eq!(plan.patches.len(), 20, "p = {p}");
             assert!(plan
                 .patches
@@ -1173,7 +1175,7 @@ fn bad_tet_meshes_are_errors_not_panics() {
         render_hexes(&short, &values, &ok),
         Err(RenderError::InvalidCurvedMesh { .. })
     ));
-    // Tets labelled as hexes, hexes as tets, and prisms, which are not
+    // Tets labelled as hexes, hexes as tets, and pyramids, which are not
     // drawn.
     let as_hexes = CurvedMesh {
         shape: Shape::Hexahedron,
@@ -1192,13 +1194,13 @@ fn bad_tet_meshes_are_errors_not_panics() {
         Err(RenderError::InvalidCurvedMesh { .. })
     ));
     let p = 1;
-    let prism = CurvedMesh {
-        shape: Shape::Prism,
-        cells: vec![(0..Shape::Prism.num_nodes(p)).collect()],
+    let pyramid = CurvedMesh {
+        shape: Shape::Pyramid,
+        cells: vec![(0..Shape::Pyramid.num_nodes(p)).collect()],
         ..tet_box(p, Spacing::Equispaced, [1, 1, 1], |x| x)
     };
     assert!(matches!(
-        render_hexes(&prism, &[1.0], &ok),
+        render_hexes(&pyramid, &[1.0], &ok),
         Err(RenderError::InvalidCurvedMesh { .. })
     ));
     // A collapsed tet mesh still renders.
@@ -1209,4 +1211,248 @@ fn bad_tet_meshes_are_errors_not_panics() {
         .skip(1)
         .for_each(|x| *x = [0.3; 3]);
     render_hexes(&collapsed, &values, &opts(Camera::default())).unwrap();
+}
+
+// Prisms.
+
+/// `v` for each of the two prisms of every cube listed, cube by cube.
+fn per_prism_cube(cubes: &[f64]) -> Vec<f64> {
+    cubes.iter().flat_map(|&v| [v; 2]).collect()
+}
+
+#[test]
+fn a_cube_of_prisms_covers_what_the_hex_cube_covers() {
+    let hex = brick([1, 1, 1]);
+    let prisms = prism_box(1, Spacing::Equispaced, [1, 1, 1], |x| x);
+    for camera in [
+        Camera::default(),
+        from_above(),
+        Camera {
+            azimuth_deg: -50.0,
+            elevation_deg: -20.0,
+            distance: Some(3.0),
+        },
+    ] {
+        let o = opts(camera);
+        let (a, plan_a) = render_decoded(&hex, &[1.05], &o);
+        let (b, plan_b) = render_decoded(&prisms, &[1.05; 2], &o);
+        let triangles = plan_b
+            .patches
+            .iter()
+            .filter(|f| f.grid == Grid::Tri(1))
+            .count();
+        assert_eq!(
+            (plan_b.patches.len(), triangles),
+            (8, 4),
+            "two triangles top and bottom, a quad on each side"
+        );
+        assert_eq!(
+            plan_a.frame.layout.plot_region(),
+            plan_b.frame.layout.plot_region()
+        );
+        let (area_a, area_b) = (drawn_area(&a, &plan_a), drawn_area(&b, &plan_b));
+        eprintln!("{camera:?}: hex {area_a} pixels, prisms {area_b}");
+        assert!(area_a > 10_000, "{area_a}");
+        assert!(
+            (area_b as f64 / area_a as f64 - 1.0).abs() < 0.02,
+            "hex {area_a} vs prisms {area_b}"
+        );
+    }
+}
+
+#[test]
+fn prism_faces_are_shaded_like_hex_faces_with_their_edges_drawn() {
+    let prisms = prism_box(1, Spacing::Equispaced, [1, 1, 1], |x| x);
+    let (img, plan) = render_decoded(&prisms, &[RED_VALUE; 2], &opts(Camera::default()));
+    // Each side of the cube has the hex colours: the top on its two
+    // triangles, the front and right sides on their quads.
+    let sides = [
+        ([0.0, 0.0, 1.0], [0.25, 0.25, 1.0]),
+        ([0.0, 0.0, 1.0], [0.75, 0.75, 1.0]),
+        ([0.0, -1.0, 0.0], [0.75, 0.0, 0.25]),
+        ([1.0, 0.0, 0.0], [1.0, 0.75, 0.25]),
+    ];
+    for (n, at) in sides {
+        assert_close(
+            pixel_of(&img, &plan, at),
+            expected(&plan, RED_VALUE, n),
+            &format!("{n:?} at {at:?}"),
+        );
+    }
+    // The top is split along its diagonal (1,0,1)–(0,1,1), drawn as an
+    // edge; the other diagonal is no edge.
+    let top = expected(&plan, RED_VALUE, [0.0, 0.0, 1.0]);
+    let [x, y, _] = plan.to_image([0.5, 0.5, 1.0]).unwrap();
+    let line = darkest_near(&img, x, y);
+    assert!(
+        brightness(line) * 10 < brightness(top) * 9,
+        "{line:?} vs {top:?}"
+    );
+    assert_close(
+        pixel_of(&img, &plan, [0.2, 0.2, 1.0]),
+        top,
+        "off the diagonal",
+    );
+}
+
+#[test]
+fn clipping_prisms_shows_the_inside() {
+    // Two cubes of prisms along x, seen from +x: the x = 2 side is red;
+    // with the second cube clipped away the side x = 1 between them shows
+    // blue.
+    let mesh = prism_box(1, Spacing::Equispaced, [2, 1, 1], |x| x);
+    let values = per_prism_cube(&[BLUE_VALUE, RED_VALUE]);
+    let camera = Camera {
+        azimuth_deg: 90.0,
+        elevation_deg: 0.0,
+        distance: None,
+    };
+    let bounds = Some(([0.0; 3], [2.0, 1.0, 1.0]));
+    let whole = RenderOptions3 {
+        bounds,
+        ..opts(camera)
+    };
+    let cut = RenderOptions3 {
+        clip: Some(ClipPlane {
+            point: [1.0, 0.0, 0.0],
+            normal: [1.0, 0.0, 0.0],
+        }),
+        ..whole.clone()
+    };
+    let side = [1.0, 0.0, 0.0];
+    let (img, plan) = render_decoded(&mesh, &values, &whole);
+    assert_eq!(plan.patches.len(), 14);
+    assert_close(
+        pixel_of(&img, &plan, [2.0, 0.75, 0.25]),
+        expected(&plan, RED_VALUE, side),
+        "x = 2",
+    );
+    let (img, plan) = render_decoded(&mesh, &values, &cut);
+    assert_eq!(plan.patches.len(), 8, "the kept cube shows its eight faces");
+    assert!(plan.patches.iter().all(|f| f.cell < 2));
+    assert_close(
+        pixel_of(&img, &plan, [1.0, 0.75, 0.25]),
+        expected(&plan, BLUE_VALUE, side),
+        "inside at x = 1",
+    );
+    let reds = plot_pixels(&plan)
+        .filter(|&(x, y)| reddish(pixel(&img, x as f64, y as f64)))
+        .count();
+    assert_eq!(reds, 0, "the dropped cube is gone");
+}
+
+#[test]
+fn bulged_prisms_follow_the_curved_side_at_p3_and_not_at_p1() {
+    let bounds = Some(([0.0; 3], [1.3, 1.0, 1.0]));
+    let o = RenderOptions3 {
+        bounds,
+        ..opts(from_above())
+    };
+    for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+        // the side x = 1, a quad face, bulges; seen from above its top
+        // edge bounds the top triangle
+        let (flat, plan1) = render_decoded(&prism_box(1, spacing, [1, 1, 1], bulge), &[0.9; 2], &o);
+        let (img, plan) = render_decoded(&prism_box(3, spacing, [1, 1, 1], bulge), &[0.9; 2], &o);
+        let top = expected(&plan, 0.9, [0.0, 0.0, 1.0]);
+        assert_close(
+            pixel_of(&img, &plan, [1.15, 0.5, 1.0]),
+            top,
+            "bulge at p = 3",
+        );
+        assert_eq!(
+            pixel_of(&flat, &plan1, [1.15, 0.5, 1.0]),
+            WHITE,
+            "no bulge at p = 1"
+        );
+        assert_eq!(pixel_of(&img, &plan, [1.25, 0.1, 1.0]), WHITE);
+        // No line between the pieces inside a face.
+        assert_close(
+            pixel_of(&img, &plan, [0.7, 1.0 / 9.0, 1.0]),
+            top,
+            "piece border",
+        );
+        let (a1, a3) = (drawn_area(&flat, &plan1), drawn_area(&img, &plan));
+        eprintln!("{spacing:?}: drawn {a1} pixels at p = 1, {a3} at p = 3");
+        assert!((a3 as f64 / a1 as f64 - 1.2).abs() < 0.03, "{a1} vs {a3}");
+        let (hex, plan_h) = render_decoded(&bulged_block(2, [1, 1, 1]), &[0.9], &o);
+        let ah = drawn_area(&hex, &plan_h);
+        assert!(
+            (a3 as f64 / ah as f64 - 1.0).abs() < 0.02,
+            "prisms {a3} vs hex {ah}"
+        );
+    }
+}
+
+/// The triangle and quad faces of curved prisms are sampled on the true
+/// surface (p = 3 holds the quadratic bulge exactly), on grids of their
+/// own kind, with normals pointing out of the mesh.
+#[test]
+fn sampled_prism_faces_lie_on_the_surface_with_outward_normals() {
+    for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+        let mesh = prism_box(3, spacing, [2, 1, 1], |x| bulge(scale(0.5, x)));
+        let corners = Corners::of(&mesh);
+        let patches = surface_patches(&mesh, &corners, &[true; 4], 9);
+        assert_eq!(patches.len(), 14);
+        for f in &patches {
+            let n = match f.grid {
+                Grid::Tri(9) => 55,
+                Grid::Quad(9) => 100,
+                g => panic!("{g:?}"),
+            };
+            assert_eq!((f.points.len(), f.normals.len()), (n, n));
+            for &[x, y, z] in &f.points {
+                let on = [x.abs(), z.abs(), (z - 0.5).abs(), y.abs(), (y - 0.5).abs()]
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min)
+                    .min((x - (1.0 + 1.2 * y * (1.0 - y))).abs());
+                assert!(on < 1e-12, "{:?} is not on the surface", [x, y, z]);
+            }
+            // The normals of the flat top (triangles) and front (quads)
+            // are theirs, pointing out.
+            let mean = scale(
+                1.0 / n as f64,
+                f.points.iter().fold([0.0; 3], |s, &x| add(s, x)),
+            );
+            for (side, normal, grid) in [
+                (mean[2] - 0.5, [0.0, 0.0, 1.0], Grid::Tri(9)),
+                (mean[1], [0.0, -1.0, 0.0], Grid::Quad(9)),
+            ] {
+                if side.abs() < 1e-12 {
+                    assert_eq!(f.grid, grid);
+                    assert!(
+                        f.normals
+                            .iter()
+                            .all(|&n| sub(n, normal).iter().all(|d| d.abs() < 1e-12)),
+                        "{spacing:?}: {:?}",
+                        f.normals
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn prisms_of_every_order_and_spacing_are_drawn() {
+    for p in 1..=4 {
+        for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+            let mesh = prism_box(p, spacing, [2, 1, 1], crate::mesh::curved::tests::bend3);
+            let values: Vec<f64> = (0..4).map(|c| 0.9 + 0.05 * c as f64).collect();
+            let (img, plan) = render_decoded(&mesh, &values, &opts(Camera::default()));
+            let m = if p == 1 { 1 } else { SUBQUADS_PER_ORDER * p };
+            assert_eq!(plan.patches.len(), 14, "p = {p}");
+            for f in &plan.patches {
+                let n = if f.grid == Grid::Tri(m) {
+                    (m + 1) * (m + 2) / 2
+                } else {
+                    (m + 1) * (m + 1)
+                };
+                assert!(
+                    matches!(f.grid, Grid::Tri(k) | Grid::Quad(k) if k == m) && f.points.len() == n
+                );
+            }
+            let area = drawn_area(&img, &plan);
+            assert!(area > 10_000, "p = {p} {spacing:?}: {area} pixels drawn");
+        }
+    }
 }
