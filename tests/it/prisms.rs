@@ -98,7 +98,7 @@ fn an_extruded_prism_layer_curves_validly_at_p2_and_p3() {
             let (bottom, _) = group_off::<3>(&out, "bottom", |x| x[2].abs());
             assert!(top < 1e-12 && bottom < 1e-12, "end planes {top:e} {bottom:e} off");
             let layer = r.quality.first_layer_change["wall"];
-            assert!(layer.all_nodes < 0.01, "first layer {first}, p = {p}: {layer:?}");
+            assert!(layer.vertices < 0.01, "first layer {first}, p = {p}: {layer:?}");
             let judged = if p == 2 {
                 gmsh_agrees(&out, &[(13, r.cells)])
             } else {
@@ -139,7 +139,7 @@ fn a_prism_layer_on_a_sphere_with_tets_outside_curves_validly_at_p2_and_p3() {
         let (off, n) = group_off::<3>(&out, "sphere", sphere);
         assert!(off < 1e-10 && n > 100, "p = {p}: sphere {off:e} off ({n} nodes)");
         let layer = r.quality.first_layer_change["sphere"];
-        assert!(layer.all_nodes < 0.01, "p = {p}: {layer:?}");
+        assert!(layer.vertices < 0.01, "p = {p}: {layer:?}");
         let prisms = gmsh["elements_by_type"]["Prism 18"].as_u64().unwrap() as usize;
         let judged = if p == 2 {
             gmsh_agrees(&out, &[(13, prisms), (11, r.cells - prisms)])

@@ -49,7 +49,7 @@ const LINEAR: [Accept; 2] = [
     Accept {
         max_dim: 3,
         max_order: 1,
-        phrase: "only linear meshes: 1 = 2-node line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 15 = point",
+        phrase: "only linear meshes: 1 = 2-node line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 6 = 6-node prism, 15 = point",
     },
 ];
 
@@ -59,7 +59,7 @@ const CURVED: [Accept; 2] = [
     Accept { max_dim: 3, max_order: 4, phrase: ACCEPTED },
 ];
 const ACCEPTED: &str = "Lagrange triangles 2/9/21/23 or quads 3/10/36/37 with lines 1/8/26/27 (2D), \
-                        tetrahedra 4/11/29/30 or hexes 5/12/92/93 with triangles or quads (3D), points 15";
+                        tetrahedra 4/11/29/30, hexes 5/12/92/93 or prisms 6/13/90/91 with triangles or quads (3D), points 15";
 
 /// How to turn another MSH flavour into one this reader accepts.
 const RESAVE_HINT: &str = "re-save it as ASCII MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
