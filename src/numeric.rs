@@ -2,9 +2,10 @@
 //! few operations special to the plane and to space. (The one-dimensional
 //! solvers the shapes use are in `geometry/solvers.rs`.) Bernstein
 //! polynomials, of which the validity certificate is made, are in
-//! [`bezier`].
+//! [`bezier`] (boxes), [`simplex_bezier`] and [`prism_bezier`].
 
 pub mod bezier;
+pub mod prism_bezier;
 pub mod simplex_bezier;
 
 /// Machine epsilon, used for root-finding and convergence tolerances.

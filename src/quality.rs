@@ -1,7 +1,8 @@
 //! Quality figures of linear quad and hex meshes: validity, Jacobian
 //! determinants, scaled Jacobians, cell sizes and the ratio J/f of
 //! achieved to prescribed Jacobian. The validity certificate itself, for
-//! elements of any order, is [`certify`].
+//! elements of any order, is [`certify`] (quads and hexes), [`simplex`]
+//! (triangles and tetrahedra) and [`prism`].
 //!
 //! Definitions (reported with the numbers):
 //! - det J is the Jacobian determinant of the bilinear or trilinear map
@@ -17,6 +18,7 @@
 //!   size is what the prescribed Jacobian asks for.
 
 pub mod certify;
+pub mod prism;
 pub mod simplex;
 
 use crate::jacobian::{lift, JacobianField, Normalisation};

@@ -284,6 +284,28 @@ impl Product {
     pub fn roundings(&self) -> usize {
         3 + self.max_terms
     }
+
+    /// The terms `(i, j, o, w)`: `out[o] += w a[i] b[j]`, each weight one
+    /// rounded quotient of exact integers (the prism's product,
+    /// [`super::prism_bezier`], is this one times the line's).
+    pub fn terms(&self) -> impl Iterator<Item = (usize, usize, usize, f64)> + '_ {
+        self.terms.iter().map(|t| (t.a as usize, t.b as usize, t.out as usize, t.w))
+    }
+
+    /// The number of output coefficients.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Never: a product has at least one coefficient.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The most terms summed into one output coefficient.
+    pub fn max_terms(&self) -> usize {
+        self.max_terms
+    }
 }
 
 /// De Casteljau bisection of the simplex at the midpoint of an edge
@@ -334,6 +356,13 @@ impl Split {
     pub fn apply(&self, e: usize, coef: &[f64]) -> (Coef, Coef) {
         let mut near_a: Coef = smallvec![0.0; self.len];
         let mut near_b: Coef = smallvec![0.0; self.len];
+        self.apply_into(e, coef, &mut near_a, &mut near_b);
+        (near_a, near_b)
+    }
+
+    /// [`Split::apply`] into the caller's slices (each of the lattice's
+    /// length): the prism's split runs it on every layer of one buffer.
+    pub fn apply_into(&self, e: usize, coef: &[f64], near_a: &mut [f64], near_b: &mut [f64]) {
         let mut line = [0.0f64; MAX_DEGREE + 1];
         let mut rest = &self.order[e][..];
         for &len in &self.lens[e] {
@@ -353,7 +382,6 @@ impl Split {
                 near_b[at[n - k] as usize] = line[n - k];
             }
         }
-        (near_a, near_b)
     }
 }
 

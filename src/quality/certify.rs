@@ -47,20 +47,28 @@ pub(crate) fn gamma(k: usize) -> f64 {
 }
 
 /// The Lagrange-to-Bernstein matrix of one direction and how far from the
-/// exact inverse it may be.
-struct Conversion {
+/// exact inverse it may be (also the z factor of the prism's conversion,
+/// [`super::prism`]).
+pub(crate) struct Conversion {
     /// The computed inverse of the Bernstein–Vandermonde matrix `V`.
-    inv: Vec<Vec<f64>>,
+    pub(crate) inv: Vec<Vec<f64>>,
     /// Its largest row sum of absolute values (∞-norm).
-    norm: f64,
-    /// `(1 + ρ)^D − 1` for D = 2, 3, with `ρ` a bound on `‖inv V − I‖∞`
-    /// for the exact `V` (entries `B_j(t_i)` of the stored nodes `t_i`).
+    pub(crate) norm: f64,
+    /// A bound on `‖inv V − I‖∞` for the exact `V` (entries `B_j(t_i)` of
+    /// the stored nodes `t_i`).
+    pub(crate) rho: f64,
+    /// `(1 + ρ)^D − 1` for D = 2, 3.
     grow: [f64; 2],
 }
 
 impl Conversion {
     fn new(p: usize, spacing: Spacing) -> Result<Self, HighOrderError> {
-        let t = nodes_1d(p, spacing)?;
+        Ok(Conversion::from_nodes(&nodes_1d(p, spacing)?))
+    }
+
+    /// For the `p + 1` nodes `t` in `[0,1]` (distinct: the 1-D node sets).
+    pub(crate) fn from_nodes(t: &[f64]) -> Self {
+        let p = t.len() - 1;
         // V[i][j] = B_j(t_i): Bernstein coefficients c satisfy V c = values
         let v: Vec<Vec<f64>> = t.iter().map(|&x| bernstein(p, x)).collect();
         let inv = invert(&v);
@@ -86,7 +94,7 @@ impl Conversion {
         let rho = rho * (1.0 + 4.0 * U);
         // without cancellation; ρ ≪ 1/D, so it is < 1/2
         let grow = [2.0, 3.0].map(|d: f64| (d * rho.ln_1p()).exp_m1().min(0.5));
-        Ok(Conversion { inv, norm, grow })
+        Conversion { inv, norm, rho, grow }
     }
 }
 
@@ -302,7 +310,9 @@ impl Default for CertifyOptions {
 }
 
 /// What [`certify`] finds about one element. Determinants are of the map
-/// from `[0,1]^d` (Gmsh's `[-1,1]^d` values are these divided by `2^d`).
+/// from `[0,1]^d` (Gmsh's `[-1,1]^d` values are these divided by `2^d`);
+/// for simplices from the unit simplex (Gmsh's own), for prisms from the
+/// unit triangle × `[0,1]` (Gmsh's are half these).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Certificate {
     /// `det J > 0` on the whole element, certified (`min_det_lower > 0`).
@@ -597,17 +607,24 @@ pub fn invalid_mixed_cells(mesh: &crate::mesh::MixedPlaneMesh) -> Vec<usize> {
 
 /// The certifier of one kind and order of element, whatever the kind:
 /// the one API the method and the readers use (tensor Bernstein bounds on
-/// quads and hexes, simplex ones on triangles and tetrahedra).
+/// quads and hexes, simplex ones on triangles and tetrahedra, the product
+/// of the two on prisms).
 pub enum ElementCertifier {
     /// Quads and hexes.
     Tensor(Certifier),
     /// Triangles and tetrahedra.
     Simplex(super::simplex::SimplexCertifier),
+    /// Prisms (wedges).
+    Prism(super::prism::PrismCertifier),
 }
 
 impl ElementCertifier {
     /// For order-`p` elements of `shape` with nodes at `spacing`.
     pub fn new(shape: crate::mesh::element::Shape, p: usize, spacing: Spacing) -> Result<Self, HighOrderError> {
+        if shape == crate::mesh::element::Shape::Prism {
+            let space = crate::mesh::element::prism::space(p, spacing)?;
+            return Ok(ElementCertifier::Prism(super::prism::PrismCertifier::new(p, &space.nodes)?));
+        }
         if shape.is_simplex() {
             let space = crate::mesh::element::simplex::space(shape, p, spacing)?;
             return Ok(ElementCertifier::Simplex(super::simplex::SimplexCertifier::new(shape, p, &space.nodes)?));
@@ -620,6 +637,7 @@ impl ElementCertifier {
         match self {
             ElementCertifier::Tensor(c) => c.is_valid(ctrl),
             ElementCertifier::Simplex(c) => c.is_valid(ctrl),
+            ElementCertifier::Prism(c) => c.is_valid(ctrl),
         }
     }
 
@@ -628,6 +646,7 @@ impl ElementCertifier {
         match self {
             ElementCertifier::Tensor(c) => c.certify(ctrl, opts),
             ElementCertifier::Simplex(c) => c.certify(ctrl, opts),
+            ElementCertifier::Prism(c) => c.certify(ctrl, opts),
         }
     }
 }

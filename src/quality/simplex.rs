@@ -41,23 +41,24 @@ fn node_count(dim: usize, p: usize) -> usize {
 }
 
 /// The Lagrange-to-Bernstein matrix of one node set and how far from the
-/// exact inverse it may be.
-struct Conversion {
+/// exact inverse it may be (also the triangle factor of the prism's
+/// conversion, [`super::prism`]).
+pub(crate) struct Conversion {
     /// The computed inverse of the Bernstein–Vandermonde matrix `V`,
     /// row-major `n × n`.
     inv: Vec<f64>,
-    n: usize,
+    pub(crate) n: usize,
     /// Its largest row sum of absolute values (∞-norm).
-    norm: f64,
+    pub(crate) norm: f64,
     /// A bound on `‖inv V − I‖∞` for the exact `V` (entries `B_j(x_i)` of
     /// the stored nodes `x_i`), below ½.
-    rho: f64,
+    pub(crate) rho: f64,
 }
 
 impl Conversion {
     /// `None` if the nodes are not unisolvent (or so nearly not that the
     /// inverse cannot be trusted to ½).
-    fn new(lat: &Lattice, nodes: &[[f64; 3]]) -> Option<Self> {
+    pub(crate) fn new(lat: &Lattice, nodes: &[[f64; 3]]) -> Option<Self> {
         let n = lat.len();
         let v: Vec<Vec<f64>> = nodes
             .iter()
@@ -95,7 +96,7 @@ impl Conversion {
 
     /// The Bernstein coefficients of the interpolant of `values` (one
     /// n-term dot product each).
-    fn apply(&self, values: &[f64]) -> Coef {
+    pub(crate) fn apply(&self, values: &[f64]) -> Coef {
         self.inv.chunks_exact(self.n).map(|row| row.iter().zip(values).map(|(a, b)| a * b).sum()).collect()
     }
 }
@@ -495,7 +496,7 @@ impl SimplexCertifier {
 /// J of an affine element: when every entry's Bernstein coefficients
 /// agree to rounding (relative to the largest, `deriv_max`), J is that
 /// constant (a vertex value: the first coefficient).
-fn constant_jacobian<const D: usize>(col: &[[Coef; D]; D], deriv_max: f64) -> Option<[[f64; D]; D]> {
+pub(crate) fn constant_jacobian<const D: usize>(col: &[[Coef; D]; D], deriv_max: f64) -> Option<[[f64; D]; D]> {
     let tol = 64.0 * f64::EPSILON * deriv_max;
     let flat = col.iter().flatten().all(|c| c.iter().all(|&v| (v - c[0]).abs() <= tol));
     flat.then(|| std::array::from_fn(|r| std::array::from_fn(|c| col[c][r][0])))
