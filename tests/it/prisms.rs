@@ -136,6 +136,9 @@ fn a_prism_layer_on_a_sphere_with_tets_outside_curves_validly_at_p2_and_p3() {
     for p in [2, 3] {
         let (r, out) = curve(dir.path(), &file, SPHERE_HALF, p);
         assert!(r.quality.invalid_elements.is_empty() && r.quality.min_det_j > 0.0);
+        // the 3D pictures draw one kind of cell: no picture, and the
+        // report says what was written
+        assert!(!out.with_extension("png").exists() && r.outputs.iter().all(|o| !o.ends_with(".png")), "{:?}", r.outputs);
         let (off, n) = group_off::<3>(&out, "sphere", sphere);
         assert!(off < 1e-10 && n > 100, "p = {p}: sphere {off:e} off ({n} nodes)");
         let layer = r.quality.first_layer_change["sphere"];
