@@ -22,6 +22,7 @@ pub mod basis;
 pub mod order;
 pub mod shape;
 pub mod prism;
+pub mod pyramid;
 pub mod simplex;
 
 pub use shape::{Face, Shape};

@@ -98,9 +98,19 @@ fn vertex_point(p: usize, v: usize) -> [usize; 3] {
     Shape::Prism.vertices()[v].map(|x| x as usize * p)
 }
 
+/// The lattice point of vertex `v` of `shape` (a prism or a pyramid),
+/// whose lattice points are affine in their positions, so a node on an
+/// edge or face is an exact combination of vertex points ([`combine`]).
+pub(super) fn lattice_vertex(shape: Shape, p: usize, v: usize) -> [usize; 3] {
+    match shape {
+        Shape::Pyramid => super::pyramid::vertex_point(p, v),
+        _ => vertex_point(p, v),
+    }
+}
+
 /// `a + (s (b − a) + t (c − a)) / p` for lattice points of the order-`p`
 /// prism; exact, as the differences of vertex points are multiples of `p`.
-fn combine(p: usize, [a, b, c]: [[usize; 3]; 3], s: usize, t: usize) -> [usize; 3] {
+pub(super) fn combine(p: usize, [a, b, c]: [[usize; 3]; 3], s: usize, t: usize) -> [usize; 3] {
     std::array::from_fn(|x| {
         let (a, b, c) = (a[x] as isize, b[x] as isize, c[x] as isize);
         (a + (s as isize * (b - a) + t as isize * (c - a)) / p as isize) as usize
@@ -130,7 +140,7 @@ pub fn face_nodes(p: usize, face: usize) -> Vec<usize> {
 
 /// The points `(s, t)` of an order-`q` face of `shape` in its own order:
 /// the triangle lattice, or tensor order (`s` fastest).
-fn face_points(shape: Shape, q: usize) -> Vec<[usize; 2]> {
+pub(super) fn face_points(shape: Shape, q: usize) -> Vec<[usize; 2]> {
     match shape {
         Shape::Triangle => simplex::lattice(shape, q).into_iter().map(|[s, t, _]| [s, t]).collect(),
         _ => (0..=q).flat_map(|t| (0..=q).map(move |s| [s, t])).collect(),
@@ -153,7 +163,7 @@ fn permutation(p: usize, points: &[[usize; 3]]) -> Vec<usize> {
 /// single node of a recursion): its triangle (`gmshGenerateMonomialsTriangle`)
 /// or quadrilateral order, each vertices, edges, then the interior
 /// recursively.
-fn gmsh_face_points(shape: Shape, q: usize) -> Vec<[usize; 2]> {
+pub(super) fn gmsh_face_points(shape: Shape, q: usize) -> Vec<[usize; 2]> {
     if q == 0 {
         return vec![[0, 0]];
     }
@@ -169,12 +179,12 @@ fn gmsh_face_points(shape: Shape, q: usize) -> Vec<[usize; 2]> {
 /// laid out by `inner(shape)` (points of an order `p − 3` triangle or
 /// `p − 2` quadrilateral), one node in from the face's sides, on the
 /// face's frame ([`face_nodes`]).
-fn face_interiors(p: usize, faces: &[(Shape, &[usize])], inner: impl Fn(Shape) -> Vec<[usize; 2]>) -> Vec<[usize; 3]> {
+pub(super) fn face_interiors(cell: Shape, p: usize, faces: &[(Shape, &[usize])], inner: impl Fn(Shape) -> Vec<[usize; 2]>) -> Vec<[usize; 3]> {
     let mut out = Vec::new();
     for &(shape, loop_) in faces {
         let interior = if shape == Shape::Triangle { p >= 3 } else { p >= 2 };
         if interior {
-            let v = |k: usize| vertex_point(p, loop_[k]);
+            let v = |k: usize| lattice_vertex(cell, p, loop_[k]);
             let frame = [v(0), v(1), v(loop_.len() - 1)];
             out.extend(inner(shape).into_iter().map(|[s, t]| combine(p, frame, s + 1, t + 1)));
         }
@@ -184,8 +194,8 @@ fn face_interiors(p: usize, faces: &[(Shape, &[usize])], inner: impl Fn(Shape) -
 
 /// The vertices, then the inner nodes of each edge of `edges` from its
 /// first vertex to its second: how both formats begin.
-fn vertices_and_edges(p: usize, edges: &[[usize; 2]]) -> Vec<[usize; 3]> {
-    let v: Vec<[usize; 3]> = (0..6).map(|a| vertex_point(p, a)).collect();
+pub(super) fn vertices_and_edges(cell: Shape, p: usize, edges: &[[usize; 2]]) -> Vec<[usize; 3]> {
+    let v: Vec<[usize; 3]> = (0..cell.vertices().len()).map(|a| lattice_vertex(cell, p, a)).collect();
     let mut out = v.clone();
     for &[a, b] in edges {
         out.extend((1..p).map(|s| combine(p, [v[a], v[b], v[a]], s, 0)));
@@ -205,8 +215,8 @@ fn vertices_and_edges(p: usize, edges: &[[usize; 2]]) -> Vec<[usize; 3]> {
 /// `perm[lattice position] = Gmsh's local number`.
 pub fn gmsh_prism_order(p: usize) -> Result<Vec<usize>, HighOrderError> {
     check_order(p)?;
-    let mut points = vertices_and_edges(p, Shape::Prism.edges());
-    points.extend(face_interiors(p, Shape::Prism.faces(), |shape| {
+    let mut points = vertices_and_edges(Shape::Prism, p, Shape::Prism.edges());
+    points.extend(face_interiors(Shape::Prism, p, Shape::Prism.faces(), |shape| {
         gmsh_face_points(shape, if shape == Shape::Triangle { p - 3 } else { p - 2 })
     }));
     if p >= 3 {
@@ -247,8 +257,8 @@ const VTK_WEDGE_FACES: [(Shape, &[usize]); 5] = [
 /// VTK's local number`.
 pub fn vtk_wedge_order(p: usize) -> Result<Vec<usize>, HighOrderError> {
     check_order(p)?;
-    let mut points = vertices_and_edges(p, &VTK_WEDGE_EDGES);
-    points.extend(face_interiors(p, &VTK_WEDGE_FACES, |shape| {
+    let mut points = vertices_and_edges(Shape::Prism, p, &VTK_WEDGE_EDGES);
+    points.extend(face_interiors(Shape::Prism, p, &VTK_WEDGE_FACES, |shape| {
         face_points(shape, if shape == Shape::Triangle { p - 3 } else { p - 2 })
     }));
     if p >= 3 {
