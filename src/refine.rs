@@ -28,7 +28,7 @@
 
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
-use crate::mesh::element::{nodes_1d, prism, simplex, Shape, Spacing};
+use crate::mesh::element::{nodes_1d, prism, pyramid, simplex, Shape, Spacing};
 use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
@@ -157,6 +157,9 @@ enum Key {
     /// node's barycentric indices on them.
     TriFace([usize; 3], [usize; 3]),
     Cell(usize, [usize; 3]),
+    /// The centre of sub-hex `s` of coarse hex `c` in a mixed solid: a
+    /// node of Algorithm 2's tetrahedra only, no element's.
+    Centre(usize, usize),
 }
 
 fn edge_key(a: usize, b: usize, k: usize, p: usize) -> Key {
@@ -419,12 +422,19 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
     Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
 }
 
-/// Splits a mixed solid of tetrahedra and prisms as [`subdivide`] does,
-/// every element at its own kind's nodes (a prism's faces carry a
-/// triangle's and a quad's nodes, so it shares them with tetrahedra,
-/// hexes and prisms). Algorithm 2's mesh is of tetrahedra: each of a
-/// prism's p³ sub-prisms is cut into three ([`prism_tets`]), so one P1
-/// system serves both kinds and the elements stay order-p prisms.
+/// Splits a mixed solid of tetrahedra, prisms, pyramids and hexes as
+/// [`subdivide`] does, every element at its own kind's nodes (faces carry
+/// a triangle's or a quad's nodes, so neighbours of any kinds share them).
+/// Algorithm 2's mesh is of tetrahedra, so one P1 system serves every
+/// kind and the elements keep theirs: each of a prism's p³ sub-prisms is
+/// cut into three ([`prism_tets`]), a pyramid's sub-pyramids into two
+/// ([`pyramid_tets`]), and each of a hex's p³ sub-hexes into six pyramids
+/// on its faces with their apex at a new centre node, then two each (a
+/// hex cut on its face diagonals alone needs such a node for some choices
+/// of the diagonals: Dompierre et al. 1999). Every quad is cut along the
+/// diagonal through its smallest node number, so neighbours cut a shared
+/// quad alike. The centre nodes come after every element's nodes (fine
+/// nodes `0..m` are the elements', `m` the largest element node + 1).
 /// Returns, per fine cell, the coarse cell it lies in.
 pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing) -> Result<(Subdivision<TetMesh, 3>, Vec<usize>), SubdivideError> {
     let t = nodes_1d(p, spacing).map_err(|_| SubdivideError::Order(p))?;
@@ -435,6 +445,10 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
     let prism_space = prism::space(p, spacing).map_err(|_| SubdivideError::Order(p))?;
     let prism_lattice = prism::lattice(p);
     let sub_prisms = prism::sub_prisms(p);
+    let pyramid_space = pyramid::space(p, spacing).map_err(|_| SubdivideError::Order(p))?;
+    let pyramid_lattice = pyramid::lattice(p);
+    let (sub_pyramids, pyramid_sub_tets) = pyramid::sub_cells(p);
+    let mut sub_hexes: Vec<(usize, [usize; 8])> = Vec::new();
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; 3]> = Vec::new();
     let (mut elements, mut sub_cells, mut owner) = (Vec::with_capacity(coarse.cells.len()), Vec::new(), Vec::new());
@@ -453,8 +467,29 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
                 }
                 elements.push(el);
             }
+            SolidCell::Pyramid(corners) => {
+                let el = pyramid_element(c, corners, &coarse.nodes, (&pyramid_lattice, &pyramid_space.nodes, p), &mut ids, &mut nodes);
+                for s in &sub_pyramids {
+                    sub_cells.extend(pyramid_tets(s.map(|a| el[a])));
+                }
+                sub_cells.extend(pyramid_sub_tets.iter().map(|s| s.map(|a| el[a])));
+                elements.push(el);
+            }
+            SolidCell::Hex(corners) => {
+                let el = tensor_element::<3, 8>(c, corners, &coarse.nodes, &t, &mut ids, &mut nodes);
+                sub_hexes.extend(tensor_sub_cells::<3, 8>(&el, p).map(|h| (c, h)));
+                elements.push(el);
+            }
         }
         owner.resize(owner.len() + sub_cells.len() - before, c);
+    }
+    // the hexes' tetrahedra, about their centres, made last
+    for (s, &(c, h)) in sub_hexes.iter().enumerate() {
+        let centre = nodes.len();
+        nodes.push(std::array::from_fn(|d| h.iter().map(|&n| nodes[n][d]).sum::<f64>() / 8.0));
+        ids.insert(Key::Centre(c, s), centre);
+        sub_cells.extend(hex_tets(h, centre));
+        owner.extend([c; 12]);
     }
     let mut b = boundary_places(&coarse.nodes, coarse_facets, &ids, nodes.len(), p, &t, spacing);
     // the tetrahedra's faces on a quad facet: its sub-quads cut as the
@@ -491,6 +526,81 @@ fn prism_element(
             })
         })
         .collect()
+}
+
+/// The fine nodes of pyramid `c` with corners `cell` (lattice order of
+/// [`pyramid`]), made or found by their keys; `(lattice, xi, p)` as for
+/// [`simplex_element`].
+fn pyramid_element(
+    c: usize,
+    cell: &[usize; 5],
+    at: &[[f64; 3]],
+    (lattice, xi, p): (&[[usize; 3]], &[[f64; 3]], usize),
+    ids: &mut HashMap<Key, usize>,
+    nodes: &mut Vec<[f64; 3]>,
+) -> Vec<usize> {
+    let corners = cell.map(|n| at[n]);
+    lattice
+        .iter()
+        .zip(xi)
+        .map(|(idx, xi)| {
+            *ids.entry(pyramid_key(c, cell, *idx, p)).or_insert_with(|| {
+                nodes.push(pyramid_point(&corners, *xi));
+                nodes.len() - 1
+            })
+        })
+        .collect()
+}
+
+/// The point of the linear pyramid with `corners` at reference `ξ`: the
+/// base's bilinear point at the collapsed `(a, b)`, moved towards the
+/// apex by `c` ([`pyramid::collapse`]).
+fn pyramid_point(corners: &[[f64; 3]; 5], xi: [f64; 3]) -> [f64; 3] {
+    let [a, b, c] = pyramid::collapse(xi);
+    let w = [(1.0 - a) * (1.0 - b), a * (1.0 - b), a * b, (1.0 - a) * b];
+    std::array::from_fn(|d| (1.0 - c) * (0..4).map(|k| w[k] * corners[k][d]).sum::<f64>() + c * corners[4][d])
+}
+
+/// The key of lattice node `(i, j, k)` of pyramid `c` with corners
+/// `cell`: on the base (k = 0) the quad's, as a hex or prism names it; on
+/// a triangle face (its edges and the apex too) the triangle's, as a
+/// tetrahedron or prism names it; else inside the cell.
+fn pyramid_key(c: usize, cell: &[usize; 5], [i, j, k]: [usize; 3], p: usize) -> Key {
+    if k == 0 {
+        return facet_key(&cell[..4], i, j, p);
+    }
+    let n = p - k;
+    // each lateral face with the node's barycentric indices on it
+    let face = if j == 0 {
+        Some(([cell[0], cell[1], cell[4]], [n - i, i, k]))
+    } else if j == n {
+        Some(([cell[3], cell[2], cell[4]], [n - i, i, k]))
+    } else if i == 0 {
+        Some(([cell[0], cell[3], cell[4]], [n - j, j, k]))
+    } else if i == n {
+        Some(([cell[1], cell[2], cell[4]], [n - j, j, k]))
+    } else {
+        None
+    };
+    face.and_then(|(corners, bary)| sub_simplex_key(&corners, &bary, p, true)).unwrap_or(Key::Cell(c, [i, j, k]))
+}
+
+/// The two tetrahedra of a (sub-)pyramid with corners `v` (base, then
+/// apex; positively oriented), its base cut along the diagonal through
+/// its smallest node number ([`prism_tets`]'s rule), each oriented like
+/// the pyramid.
+pub fn pyramid_tets(v: [usize; 5]) -> [[usize; 4]; 2] {
+    let [a, b] = split_face([v[0], v[1], v[2], v[3]]);
+    [[a[0], a[1], a[2], v[4]], [b[0], b[1], b[2], v[4]]]
+}
+
+/// The twelve tetrahedra of a sub-hex with corners `h` (Gmsh's order,
+/// positively oriented) and a node `centre` inside: a pyramid on each
+/// face with its apex at the centre, cut by [`pyramid_tets`].
+fn hex_tets(h: [usize; 8], centre: usize) -> impl Iterator<Item = [usize; 4]> {
+    // the faces run counter-clockwise seen from outside: reversed, seen
+    // from the centre
+    Shape::Hexahedron.faces().iter().flat_map(move |(_, f)| pyramid_tets([h[f[0]], h[f[3]], h[f[2]], h[f[1]], centre]))
 }
 
 /// The point of the linear prism with `corners` at reference `ξ`: the
@@ -1765,6 +1875,89 @@ mod tests {
             let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
             assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
             assert_eq!(s.elements[0].len(), Shape::Prism.num_nodes(p));
+        }
+    }
+
+    /// Two hexes side by side, a pyramid on the first one's top and a
+    /// tetrahedron on each of the pyramid's triangles, nodes numbered out
+    /// of order: at every order the fine tetrahedra (the hexes' about
+    /// their sub-hexes' centres, the pyramid's cut on their bases) are
+    /// positive, fill the cells, and meet face to face; the centres come
+    /// after every element node.
+    #[test]
+    fn hexes_pyramids_and_tets_subdivide_into_conforming_tets() {
+        use crate::mesh::{MixedSolidMesh, SolidCell};
+        let points = [
+            [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
+            [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [2.0, 0.0, 1.0], [2.0, 1.0, 1.0], [0.5, 0.5, 1.6],
+            [0.5, -0.4, 1.3], [1.4, 0.5, 1.3], [0.5, 1.4, 1.3], [-0.4, 0.5, 1.3],
+        ];
+        let order = [11, 3, 16, 0, 7, 14, 2, 9, 5, 12, 1, 15, 6, 10, 4, 13, 8];
+        let mut nodes = vec![[0.0; 3]; points.len()];
+        for (k, x) in points.iter().enumerate() {
+            nodes[order[k]] = *x;
+        }
+        let at = |k: usize| order[k];
+        let mut cells = vec![
+            SolidCell::Hex([0, 1, 2, 3, 4, 5, 6, 7].map(at)),
+            SolidCell::Hex([1, 8, 9, 2, 5, 10, 11, 6].map(at)),
+            SolidCell::Pyramid([4, 5, 6, 7, 12].map(at)),
+        ];
+        // on each triangle (a, b, apex) of the pyramid, outward
+        for (a, b, out) in [(4, 5, 13), (5, 6, 14), (6, 7, 15), (7, 4, 16)] {
+            cells.push(SolidCell::Tet([a, b, 12, out].map(at)));
+        }
+        let volume: f64 = cells.iter().map(|c| {
+            let j = c.corner_jacobians(&nodes);
+            match c {
+                SolidCell::Tet(_) => j[0] / 6.0,
+                _ => 0.0,
+            }
+        }).sum::<f64>() + 2.0 + 0.6 / 3.0;
+        assert!(cells.iter().all(|c| c.corner_jacobians(&nodes).iter().all(|&j| j > 0.0)));
+        let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
+        for f in cells.iter().flat_map(SolidCell::faces) {
+            let mut k = f.clone();
+            k.sort_unstable();
+            count.entry(k).or_insert((0, f)).0 += 1;
+        }
+        let faces: Vec<(Vec<usize>, usize)> = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
+        let coarse = MixedSolidMesh { nodes, cells, faces, part_names: vec!["all".into()] };
+        for p in 1..=4 {
+            for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
+                let (s, owner) = subdivide_mixed_solid(&coarse, p, spacing).unwrap();
+                let p3 = p * p * p;
+                assert_eq!(owner.iter().filter(|&&c| c < 2).count(), 2 * 12 * p3, "p = {p}");
+                assert_eq!(owner.iter().filter(|&&c| c == 2).count(), (1..=p).map(|q| 2 * q * q + 2 * (q - 1) * (q - 1) + 2 * q * (q - 1)).sum::<usize>());
+                let last = s.elements.iter().flatten().max().unwrap() + 1;
+                assert_eq!(s.fine.nodes.len(), last + 2 * p3, "p = {p}: the centres come last");
+                let vols: Vec<f64> = s.fine.cells.iter().map(|c| {
+                    let x = c.map(|n| s.fine.nodes[n]);
+                    let e = |a: usize| std::array::from_fn::<f64, 3, _>(|d| x[a][d] - x[0][d]);
+                    crate::numeric::dot(crate::numeric::cross3(e(1), e(2)), e(3)) / 6.0
+                }).collect();
+                assert!(vols.iter().all(|&v| v > 0.0), "p = {p} {spacing:?}: a negative fine tetrahedron");
+                assert!((vols.iter().sum::<f64>() - volume).abs() < 1e-13, "p = {p}");
+                let mut sorted = s.fine.nodes.clone();
+                sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                assert!(sorted.windows(2).all(|w| dist2(w[0], w[1]) > 1e-20), "p = {p}: two fine nodes at one point");
+                let mut held: HashMap<Vec<usize>, usize> = HashMap::new();
+                for t in &s.fine.cells {
+                    for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+                        let mut k = f.map(|a| t[a]).to_vec();
+                        k.sort_unstable();
+                        *held.entry(k).or_default() += 1;
+                    }
+                }
+                for f in &s.fine.faces {
+                    let mut k = f.nodes.to_vec();
+                    k.sort_unstable();
+                    *held.entry(k).or_default() += 1;
+                }
+                assert!(held.values().all(|&n| n == 2), "p = {p} {spacing:?}: a face held once: the cuts of a shared quad differ");
+                let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
+                assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+            }
         }
     }
 

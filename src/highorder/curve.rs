@@ -422,6 +422,9 @@ fn element_faces<const D: usize>(shape: Shape, p: usize, depth: usize) -> Vec<Ve
     if shape == Shape::Prism {
         return prism_faces(p, depth);
     }
+    if shape == Shape::Pyramid {
+        return pyramid_faces(p, depth);
+    }
     if shape.is_simplex() {
         return (0..=D).map(|opp| simplex_face_columns(shape, p, opp, depth)).collect();
     }
@@ -450,6 +453,34 @@ fn prism_faces(p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
         out.push((0..=p).flat_map(|k| columns.iter().map(move |&(t, inner, v)| (k * nt + t, k * nt + inner, v && (k == 0 || k == p)))).collect());
     }
     out
+}
+
+/// [`element_faces`] of an order-p pyramid (lattice order of
+/// [`crate::mesh::element::pyramid`], faces of [`Shape::faces`]): each
+/// node with the node `depth` steps in along the lattice axis that leaves
+/// its face (up from the base, across the square layer from a triangle),
+/// kept in the lattice (towards the apex the layers narrow).
+fn pyramid_faces(p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
+    use crate::mesh::element::pyramid::{face_nodes, lattice, lattice_index, vertex_nodes};
+    let lat = lattice(p);
+    let vertices = vertex_nodes(p);
+    let inward = |face: usize, [i, j, k]: [usize; 3]| -> [usize; 3] {
+        let n = p - k;
+        match face {
+            // (0,1,4) at j = 0; (3,0,4) at i = 0; (1,2,4) at i = n; (2,3,4) at j = n
+            0 => [i, j + depth.min(n), k],
+            1 => [i + depth.min(n), j, k],
+            2 => [i - depth.min(i), j, k],
+            3 => [i, j - depth.min(j), k],
+            _ => {
+                let up = depth.min(p);
+                [i.min(p - up), j.min(p - up), up]
+            }
+        }
+    };
+    (0..Shape::Pyramid.faces().len())
+        .map(|f| face_nodes(p, f).into_iter().map(|a| (a, lattice_index(p, inward(f, lat[a])), vertices.contains(&a))).collect())
+        .collect()
 }
 
 /// The nodes of face `side` (0 or p) across axis `d` of the tensor-ordered

@@ -66,6 +66,7 @@ use thiserror::Error;
 
 use crate::io::fmt_f64;
 use crate::mesh::element::basis::{det, tensor_map, Basis1d};
+use crate::mesh::element::Shape;
 use crate::mesh::file::write_atomic;
 use crate::mesh::CurvedMesh;
 
@@ -274,8 +275,8 @@ fn key(mut nodes: Vec<usize>) -> Vec<usize> {
 pub fn abaqus_string<const D: usize>(mesh: &CurvedMesh<D>) -> Result<String, AbaqusError> {
     mesh.validate().map_err(AbaqusError::InvalidMesh)?;
     // any cell of another kind, not just the first (a mixed mesh would
-    // have its triangles written as quads)
-    if let Some(shape) = mesh.shapes().into_iter().find(|s| s.is_simplex()) {
+    // have its triangles, prisms or pyramids written as quads or hexes)
+    if let Some(shape) = mesh.shapes().into_iter().find(|s| !matches!(s, Shape::Quadrilateral | Shape::Hexahedron)) {
         return Err(AbaqusError::Shape(shape));
     }
     for name in &mesh.part_names {

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use thiserror::Error;
 
-use crate::mesh::element::{prism, simplex};
+use crate::mesh::element::{prism, pyramid, simplex};
 use crate::mesh::CurvedMesh;
 
 /// Name of the physical group that holds all cells of a mesh the crate
@@ -533,6 +533,9 @@ fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
     if shape == Shape::Prism {
         return prism::vertex_nodes(p).to_vec();
     }
+    if shape == Shape::Pyramid {
+        return pyramid::vertex_nodes(p).to_vec();
+    }
     if shape.is_simplex() && d >= 2 {
         return simplex::vertex_nodes(shape, p);
     }
@@ -553,8 +556,8 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> 
     if dim == d {
         return vec![(shape, (0..shape.num_nodes(p)).collect())];
     }
-    if shape == Shape::Prism {
-        return prism_sub_elements(p, dim);
+    if matches!(shape, Shape::Prism | Shape::Pyramid) {
+        return prism_sub_elements(shape, p, dim);
     }
     if shape.is_simplex() {
         return match dim {
@@ -580,27 +583,20 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> 
     out
 }
 
-/// [`sub_elements`] of an order-`p` prism (dimension 1 or 2): each edge
-/// from its first vertex, each face on its loop ([`Shape::faces`]) — a
-/// triangle in lattice order, a quad in tensor order from its first
-/// corner towards its second. The faces are flat in the lattice's
-/// integer coordinates, so every node is a combination of the corners.
-fn prism_sub_elements(p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> {
-    let tri = [[0, 0], [p, 0], [0, p]];
-    let v = |a: usize| [tri[a % 3][0] as isize, tri[a % 3][1] as isize, if a < 3 { 0 } else { p as isize }];
-    // the lattice node at a + (s (b − a) + t (c − a)) / p
-    let at = |a: usize, b: usize, c: usize, s: usize, t: usize| {
-        let x: [isize; 3] = std::array::from_fn(|d| v(a)[d] + (s as isize * (v(b)[d] - v(a)[d]) + t as isize * (v(c)[d] - v(a)[d])) / p as isize);
-        prism::lattice_index(p, x.map(|y| y as usize))
+/// [`sub_elements`] of an order-`p` prism or pyramid (dimension 1 or 2):
+/// each edge from its first vertex, each face on its loop
+/// ([`Shape::faces`]) — a triangle in lattice order, a quad in tensor
+/// order from its first corner towards its second (the element modules'
+/// `edge_nodes` and `face_nodes`).
+fn prism_sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> {
+    let (edge, face): (fn(usize, usize) -> Vec<usize>, fn(usize, usize) -> Vec<usize>) = match shape {
+        Shape::Pyramid => (pyramid::edge_nodes, pyramid::face_nodes),
+        _ => (prism::edge_nodes, prism::face_nodes),
     };
     if dim == 1 {
-        return Shape::Prism.edges().iter().map(|&[a, b]| (Shape::Line, (0..=p).map(|s| at(a, b, a, s, 0)).collect())).collect();
+        return (0..shape.edges().len()).map(|e| (Shape::Line, edge(p, e))).collect();
     }
-    let face = |&(kind, l): &(Shape, &[usize])| match kind {
-        Shape::Triangle => (kind, simplex::lattice(Shape::Triangle, p).into_iter().map(|[s, t, _]| at(l[0], l[1], l[2], s, t)).collect()),
-        _ => (kind, (0..=p).flat_map(|t| (0..=p).map(move |s| (s, t))).map(|(s, t)| at(l[0], l[1], l[3], s, t)).collect()),
-    };
-    Shape::Prism.faces().iter().map(face).collect()
+    shape.faces().iter().enumerate().map(|(f, &(kind, _))| (kind, face(p, f))).collect()
 }
 
 /// What [`SubElements::new`] looks up per cell of one kind, computed once

@@ -39,7 +39,7 @@ use thiserror::Error;
 
 use super::fmt_f64;
 use crate::mesh::element::order::HEX_CORNERS;
-use crate::mesh::element::Spacing;
+use crate::mesh::element::{Shape, Spacing};
 use crate::mesh::file::write_atomic;
 use crate::mesh::CurvedMesh;
 
@@ -151,8 +151,8 @@ pub fn mfem_string<const D: usize>(
 ) -> Result<String, MfemError> {
     mesh.validate().map_err(MfemError::InvalidMesh)?;
     // any cell of another kind, not just the first (a mixed mesh would
-    // have its triangles written as quads)
-    if let Some(shape) = mesh.shapes().into_iter().find(|s| s.is_simplex()) {
+    // have its triangles, prisms or pyramids written as quads or hexes)
+    if let Some(shape) = mesh.shapes().into_iter().find(|s| !matches!(s, Shape::Quadrilateral | Shape::Hexahedron)) {
         return Err(MfemError::Shape(shape));
     }
     check_attributes("cell", cell_attributes, mesh.cells.len())?;

@@ -36,6 +36,8 @@ pub const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
 pub const VTK_WEDGE: u8 = 13;
 /// VTK's Lagrange wedge of any order.
 pub const VTK_LAGRANGE_WEDGE: u8 = 73;
+/// VTK's linear pyramid, vertices in Gmsh's order.
+pub const VTK_PYRAMID: u8 = 14;
 
 /// Errors of writing VTU files.
 #[derive(Debug, Error)]
@@ -73,6 +75,15 @@ pub enum VtuError {
     /// A mesh or array that cannot be written (dangling index, bad name).
     #[error("cannot write VTU: {0}")]
     Invalid(String),
+    /// An element VTK has no cell for.
+    #[error("cannot write VTU: VTK has no cell for pyramids of order {0} (VTK 9 names VTK_LAGRANGE_PYRAMID = 74 but has no cell behind it, and its 13- and 19-node pyramids are other spaces); the MSH file holds them")]
+    NoPyramidCell(usize),
+}
+
+/// Whether VTK has a cell for every element of `mesh`: not for pyramids
+/// above order 1.
+pub fn vtk_can_hold<const D: usize>(mesh: &CurvedMesh<D>) -> bool {
+    mesh.p == 1 || !mesh.shapes().contains(&Shape::Pyramid)
 }
 
 /// The quad mesh as a VTK XML UnstructuredGrid ([`grid_string`] of the
@@ -246,6 +257,9 @@ fn validate<const D: usize>(
 ) -> Result<(), VtuError> {
     check_finite("point coordinates", mesh.nodes.iter().flatten().copied(), D)?;
     mesh.validate().map_err(VtuError::Invalid)?;
+    if !vtk_can_hold(mesh) {
+        return Err(VtuError::NoPyramidCell(mesh.p));
+    }
     check_names(cell_data.iter().map(|a| a.0))?;
     check_names(point_vectors.iter().map(|a| a.0))?;
     for (name, values) in cell_data {
@@ -272,6 +286,8 @@ fn vtk_type(shape: Shape, p: usize) -> (Vec<usize>, u8) {
     match (shape, p) {
         (Shape::Prism, 1) => (prism::vtk_wedge_order(1).expect(ok), VTK_WEDGE),
         (Shape::Prism, _) => (prism::vtk_wedge_order(p).expect(ok), VTK_LAGRANGE_WEDGE),
+        // refused above order 1 by validate
+        (Shape::Pyramid, _) => (crate::mesh::element::pyramid::gmsh_pyramid_order(1).expect(ok), VTK_PYRAMID),
         (Shape::Triangle, 1) => (vec![0, 1, 2], VTK_TRIANGLE),
         (Shape::Triangle, _) => (simplex::vtk_triangle_order(p).expect(ok), VTK_LAGRANGE_TRIANGLE),
         (Shape::Tetrahedron, 1) => (vec![0, 1, 2, 3], VTK_TETRA),

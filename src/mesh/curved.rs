@@ -7,7 +7,7 @@
 
 use super::element::basis::{tensor_map, Basis1d};
 use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
-use super::element::{prism, simplex, Shape};
+use super::element::{prism, pyramid, simplex, Shape};
 use super::{PlaneMesh, SolidMesh};
 
 /// One boundary element: an order-`p` line (2D meshes) or quad (3D
@@ -208,7 +208,7 @@ impl<const D: usize> CurvedMesh<D> {
         if !(2..=3).contains(&D) {
             return Err(format!("{D}D meshes are not supported"));
         }
-        if self.shape.dim() != D || !matches!(self.shape, Shape::Triangle | Shape::Quadrilateral | Shape::Tetrahedron | Shape::Hexahedron | Shape::Prism) {
+        if self.shape.dim() != D || !matches!(self.shape, Shape::Triangle | Shape::Quadrilateral | Shape::Tetrahedron | Shape::Hexahedron | Shape::Prism | Shape::Pyramid) {
             return Err(format!("cells of shape {:?} in a {D}D mesh", self.shape));
         }
         let n = self.nodes.len();
@@ -224,9 +224,9 @@ impl<const D: usize> CurvedMesh<D> {
         }
         let per_cell = self.nodes_per_cell();
         for (c, cell) in self.cells.iter().enumerate() {
-            // a mixed mesh: quads with triangles, tetrahedra with prisms
-            // (pyramids are not curved yet)
-            let other = Shape::with_nodes(D, self.p, cell.len()).filter(|&s| s != Shape::Pyramid);
+            // a mixed mesh: quads with triangles; tetrahedra, prisms,
+            // pyramids and hexes
+            let other = Shape::with_nodes(D, self.p, cell.len());
             if cell.len() != per_cell && other.is_none() {
                 return Err(format!(
                     "cell {c} has {} nodes, expected {per_cell}",
@@ -301,16 +301,12 @@ impl<const D: usize> CurvedMesh<D> {
         if self.shapes().contains(&Shape::Prism) {
             let space = prism::space(self.p, self.spacing).expect("order checked by validate");
             let equi = prism::prism_nodes(self.p, Spacing::Equispaced).expect("order checked by validate");
-            let (mut values, mut grads) = (vec![0.0; space.nodes.len()], vec![[0.0; 3]; space.nodes.len()]);
-            for cell in (0..self.cells.len()).filter(|&c| self.cell_shape(c) == Shape::Prism).map(|c| &self.cells[c]) {
-                for (a, &v) in cell.iter().enumerate() {
-                    if std::mem::replace(&mut done[v], true) {
-                        continue;
-                    }
-                    space.eval(equi[a], &mut values, &mut grads);
-                    out.nodes[v] = std::array::from_fn(|k| cell.iter().zip(&values).map(|(&w, &b)| b * self.nodes[w][k]).sum());
-                }
-            }
+            self.resample(&mut out, &mut done, Shape::Prism, &equi, |x, v, g| space.eval(x, v, g));
+        }
+        if self.shapes().contains(&Shape::Pyramid) {
+            let space = pyramid::space(self.p, self.spacing).expect("order checked by validate");
+            let equi = pyramid::pyramid_nodes(self.p, Spacing::Equispaced).expect("order checked by validate");
+            self.resample(&mut out, &mut done, Shape::Pyramid, &equi, |x, v, g| space.eval(x, v, g));
         }
         let basis = Basis1d::new(self.p, self.spacing).expect("order checked by validate");
         let t = nodes_1d(self.p, Spacing::Equispaced).expect("order checked by validate");
@@ -333,6 +329,22 @@ impl<const D: usize> CurvedMesh<D> {
         }
         out.spacing = Spacing::Equispaced;
         out
+    }
+
+    /// Moves each node of the cells of `shape` not yet `done` in `out` to
+    /// the image of its equispaced reference node `equi[a]` under the
+    /// cell's map (basis values by `eval`, as the spaces' `eval`).
+    fn resample(&self, out: &mut CurvedMesh<D>, done: &mut [bool], shape: Shape, equi: &[[f64; 3]], eval: impl Fn([f64; 3], &mut [f64], &mut [[f64; 3]])) {
+        let (mut values, mut grads) = (vec![0.0; equi.len()], vec![[0.0; 3]; equi.len()]);
+        for cell in (0..self.cells.len()).filter(|&c| self.cell_shape(c) == shape).map(|c| &self.cells[c]) {
+            for (a, &v) in cell.iter().enumerate() {
+                if std::mem::replace(&mut done[v], true) {
+                    continue;
+                }
+                eval(equi[a], &mut values, &mut grads);
+                out.nodes[v] = std::array::from_fn(|k| cell.iter().zip(&values).map(|(&w, &b)| b * self.nodes[w][k]).sum());
+            }
+        }
     }
 }
 
@@ -377,12 +389,21 @@ impl CurvedMesh<3> {
 }
 
 impl CurvedMesh<3> {
-    /// The linear mesh of tetrahedra and prisms as the order-1 case (a
-    /// tetrahedron's and a prism's vertices are their lattice order; a
-    /// quad face goes into tensor order); its `shape` is the first cell's.
+    /// The linear mixed solid as the order-1 case (a tetrahedron's and a
+    /// prism's vertices are their lattice order; a hex goes into tensor
+    /// order, a pyramid into its lattice order (base corners 0, 1, 3, 2),
+    /// a quad face into tensor order); its `shape` is the first cell's.
     pub fn from_mixed_solid(m: &super::MixedSolidMesh) -> Self {
-        let quad = gmsh_quad_order(1).expect("order 1");
-        let cells = m.cells.iter().map(|c| c.nodes().to_vec()).collect();
+        let (quad, hex, pyr) = (gmsh_quad_order(1).expect("order 1"), gmsh_hex_order(1).expect("order 1"), pyramid::gmsh_pyramid_order(1).expect("order 1"));
+        let cells = m
+            .cells
+            .iter()
+            .map(|c| match c {
+                super::SolidCell::Hex(n) => from_format(&hex, n),
+                super::SolidCell::Pyramid(n) => from_format(&pyr, n),
+                _ => c.nodes().to_vec(),
+            })
+            .collect();
         let face = |f: &[usize]| if f.len() == 4 { from_format(&quad, f) } else { f.to_vec() };
         let boundary = m.faces.iter().map(|(f, part)| CurvedBoundary { nodes: face(f), part: *part }).collect();
         let shape = m.cells.first().map_or(Shape::Prism, |c| c.shape());

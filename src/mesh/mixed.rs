@@ -91,14 +91,34 @@ pub enum SolidCell {
     Tet([usize; 4]),
     /// A linear prism: the bottom triangle, then the top one above it.
     Prism([usize; 6]),
+    /// A linear pyramid: the base counter-clockwise seen from the apex,
+    /// then the apex.
+    Pyramid([usize; 5]),
+    /// A trilinear hexahedron: the bottom counter-clockwise seen from the
+    /// top, then the top above it.
+    Hex([usize; 8]),
 }
 
 impl SolidCell {
+    /// The cell of `nodes` (4, 5, 6 or 8 of them: a tetrahedron, pyramid,
+    /// prism or hexahedron), or `None` for another count.
+    pub fn from_nodes(n: &[usize]) -> Option<SolidCell> {
+        Some(match n.len() {
+            4 => SolidCell::Tet([n[0], n[1], n[2], n[3]]),
+            5 => SolidCell::Pyramid([n[0], n[1], n[2], n[3], n[4]]),
+            6 => SolidCell::Prism([n[0], n[1], n[2], n[3], n[4], n[5]]),
+            8 => SolidCell::Hex(std::array::from_fn(|k| n[k])),
+            _ => return None,
+        })
+    }
+
     /// The vertices.
     pub fn nodes(&self) -> &[usize] {
         match self {
             SolidCell::Tet(c) => c,
             SolidCell::Prism(c) => c,
+            SolidCell::Pyramid(c) => c,
+            SolidCell::Hex(c) => c,
         }
     }
 
@@ -107,6 +127,8 @@ impl SolidCell {
         match self {
             SolidCell::Tet(_) => Shape::Tetrahedron,
             SolidCell::Prism(_) => Shape::Prism,
+            SolidCell::Pyramid(_) => Shape::Pyramid,
+            SolidCell::Hex(_) => Shape::Hexahedron,
         }
     }
 
@@ -117,8 +139,10 @@ impl SolidCell {
     }
 
     /// det J of the linear map at each vertex (the triple product of the
-    /// reference axes' images there): a prism's det J is not constant,
-    /// and the corners are where a flat or twisted linear cell fails.
+    /// reference axes' images there): only a tetrahedron's det J is
+    /// constant, and the corners are where a flat or twisted linear cell
+    /// fails. A pyramid's det J does not depend on the height (see
+    /// [`crate::mesh::element::pyramid`]): its four base corners tell.
     pub fn corner_jacobians(&self, at: &[[f64; 3]]) -> Vec<f64> {
         let x = |k: usize| at[self.nodes()[k]];
         let e = |a: usize, b: usize| std::array::from_fn::<f64, 3, _>(|d| x(b)[d] - x(a)[d]);
@@ -130,6 +154,23 @@ impl SolidCell {
                     // the vertical edge through v
                     let o = 3 * (v / 3);
                     triple(e(o, o + 1), e(o, o + 2), e(v % 3, v % 3 + 3))
+                })
+                .collect(),
+            // the base's edges along x and y at the corner, and the edge up
+            // to the apex
+            SolidCell::Pyramid(_) => vec![
+                triple(e(0, 1), e(0, 3), e(0, 4)),
+                triple(e(0, 1), e(1, 2), e(1, 4)),
+                triple(e(3, 2), e(1, 2), e(2, 4)),
+                triple(e(3, 2), e(0, 3), e(3, 4)),
+            ],
+            SolidCell::Hex(_) => (0..8)
+                .map(|v| {
+                    // v's bits (x, y, z) and the corner across each axis
+                    let bits = [[0, 0], [1, 0], [1, 1], [0, 1]][v % 4];
+                    let corner = |x: usize, y: usize, z: usize| 4 * z + [[0, 3], [1, 2]][x][y];
+                    let (bx, by, bz) = (bits[0], bits[1], v / 4);
+                    triple(e(corner(0, by, bz), corner(1, by, bz)), e(corner(bx, 0, bz), corner(bx, 1, bz)), e(corner(bx, by, 0), corner(bx, by, 1)))
                 })
                 .collect(),
         }
@@ -146,9 +187,10 @@ impl AsRef<[usize]> for SolidCell {
     }
 }
 
-/// A linear solid mesh of tetrahedra and prisms (prism layers on walls,
-/// tetrahedra outside) with named boundary parts. Cells keep the file's
-/// order.
+/// A linear solid mesh of tetrahedra, prisms, pyramids and hexahedra
+/// (prism layers on walls with tetrahedra outside; hex-dominant meshes
+/// with pyramids between hexes and tetrahedra) with named boundary parts.
+/// Cells keep the file's order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MixedSolidMesh {
     /// Node coordinates.
@@ -166,6 +208,14 @@ impl MixedSolidMesh {
     /// How many cells are of `shape`.
     pub fn count(&self, shape: Shape) -> usize {
         self.cells.iter().filter(|c| c.shape() == shape).count()
+    }
+
+    /// The kinds of its cells, in the order of [`Shape`].
+    pub fn shapes(&self) -> Vec<Shape> {
+        let mut out: Vec<Shape> = self.cells.iter().map(SolidCell::shape).collect();
+        out.sort();
+        out.dedup();
+        out
     }
 
     /// The cells with det J ≤ 0 at a vertex.
@@ -216,5 +266,28 @@ mod tests {
         assert!(upside_down.corner_jacobians(&at).iter().all(|&j| j < 0.0));
         let m = MixedSolidMesh { nodes: folded, cells: vec![prism, SolidCell::Tet([0, 1, 2, 3])], faces: Vec::new(), part_names: Vec::new() };
         assert_eq!((m.invalid_cells(), m.count(Shape::Prism)), (vec![0], 1));
+    }
+
+    /// The corner Jacobians of the reference pyramid and hex are 1, scale
+    /// with a stretch, and show an apex pushed through the base and a hex
+    /// corner folded in.
+    #[test]
+    fn pyramid_and_hex_corners_show_folds() {
+        for shape in [Shape::Pyramid, Shape::Hexahedron] {
+            let at: Vec<[f64; 3]> = shape.vertices().to_vec();
+            let cell = SolidCell::from_nodes(&(0..at.len()).collect::<Vec<_>>()).unwrap();
+            assert_eq!(cell.shape(), shape);
+            assert!(cell.corner_jacobians(&at).iter().all(|&j| (j - 1.0).abs() < 1e-15), "{shape:?}");
+            let stretched: Vec<[f64; 3]> = at.iter().map(|x| [2.0 * x[0], x[1], 3.0 * x[2]]).collect();
+            assert!(cell.corner_jacobians(&stretched).iter().all(|&j| (j - 6.0).abs() < 1e-14), "{shape:?}");
+        }
+        let mut at: Vec<[f64; 3]> = Shape::Pyramid.vertices().to_vec();
+        at[4][2] = -0.5;
+        assert!(SolidCell::Pyramid([0, 1, 2, 3, 4]).corner_jacobians(&at).iter().all(|&j| j < 0.0));
+        let mut at: Vec<[f64; 3]> = Shape::Hexahedron.vertices().to_vec();
+        at[6] = [0.2, 0.2, 0.2];
+        let j = SolidCell::Hex(std::array::from_fn(|k| k)).corner_jacobians(&at);
+        assert!(j[6] < 0.0 && j[0] > 0.0, "{j:?}");
+        assert_eq!(SolidCell::from_nodes(&[0, 1, 2]), None);
     }
 }

@@ -656,7 +656,7 @@ fn a_bound_group_that_no_element_carries_is_an_error() {
 }
 
 #[test]
-fn triangles_and_mixed_plane_meshes_are_read_and_pyramids_refused_naming_the_block() {
+fn triangles_and_mixed_plane_meshes_are_read_and_serendipity_pyramids_refused_naming_the_block() {
     let dir = TempDir::new().unwrap();
     let tri = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
     std::fs::write(dir.path().join("tri.msh"), tri).unwrap();
@@ -673,9 +673,9 @@ fn triangles_and_mixed_plane_meshes_are_read_and_pyramids_refused_naming_the_blo
     let ran = deformesh(dir.path(), &["quality", "mixed.msh"]);
     assert_eq!(ran.code, Some(0), "{}", ran.stderr);
     assert!(ran.stdout.contains("elements 2  nodes 5") && ran.stdout.contains("min >= 1.000000e0") && ran.stdout.contains("min 0.9292  max 1.0000"), "{}", ran.stdout);
-    std::fs::write(dir.path().join("pyramid.msh"), tri.replace("2 1 2 1", "2 1 7 1")).unwrap();
+    std::fs::write(dir.path().join("pyramid.msh"), tri.replace("2 1 2 1", "2 1 19 1")).unwrap();
     let ran = deformesh(dir.path(), &["quality", "pyramid.msh"]);
-    assert_clean_failure(&ran, dir.path(), &["pyramid.msh", "line 16", "element type 7", "Pyramids are not curved yet"], &["mixed.msh", "pyramid.msh", "tri.msh"]);
+    assert_clean_failure(&ran, dir.path(), &["pyramid.msh", "line 16", "element type 19", "13-node (serendipity) pyramid"], &["mixed.msh", "pyramid.msh", "tri.msh"]);
 }
 
 #[test]

@@ -169,16 +169,16 @@ fn reader_errors_name_the_line() {
         let e = curve_error(dir.path(), damaged(dir.path(), edit)).to_string();
         assert!(e.contains(needle), "`{needle}` not in: {e}");
     }
-    // an element type the reader does not take: a pyramid block
+    // an element type the reader does not take: a 13-node pyramid block
     let tri = damaged(dir.path(), |t| {
         let i = t.find("$Elements").unwrap();
         let j = i + t[i..].match_indices('\n').nth(1).unwrap().0 + 1; // the first block header
         let header: Vec<String> = t[j..].lines().next().unwrap().split_whitespace().map(String::from).collect();
-        let new = format!("{} {} 7 {}", header[0], header[1], header[3]);
+        let new = format!("{} {} 19 {}", header[0], header[1], header[3]);
         format!("{}{}{}", &t[..j], new, &t[j + t[j..].find('\n').unwrap()..])
     });
     let e = curve_error(dir.path(), tri).to_string();
-    assert!(e.contains("unsupported element type 7") && e.contains("line") && e.contains("Pyramids are not curved yet"), "{e}");
+    assert!(e.contains("unsupported element type 19") && e.contains("line") && e.contains("13-node (serendipity) pyramid"), "{e}");
 }
 
 #[test]

@@ -45,6 +45,19 @@ fn simplex_points(d: usize, seed: u64) -> Vec<[f64; 3]> {
     out
 }
 
+/// Points of our reference pyramid: the collapsed cube's points (c < 1)
+/// mapped into it.
+fn pyramid_points(seed: u64) -> Vec<[f64; 3]> {
+    let mut s = seed;
+    (0..POINTS)
+        .map(|_| {
+            let [a, b, c]: [f64; 3] = std::array::from_fn(|_| rand01(&mut s));
+            let c = 0.95 * c;
+            [a * (1.0 - c) + 0.5 * c, b * (1.0 - c) + 0.5 * c, c]
+        })
+        .collect()
+}
+
 /// Points of the unit triangle × [0, 1].
 fn prism_points(seed: u64) -> Vec<[f64; 3]> {
     let mut s = seed;
@@ -56,6 +69,8 @@ struct Fixture {
     points: [Vec<[f64; 3]>; 2],
     /// The evaluation points of the prism.
     prism_points: Vec<[f64; 3]>,
+    /// The evaluation points of the pyramid.
+    pyramid_points: Vec<[f64; 3]>,
     report: Value,
 }
 
@@ -64,14 +79,16 @@ fn fixture() -> &'static Fixture {
     F.get_or_init(|| {
         let points = [simplex_points(2, 11), simplex_points(3, 12)];
         let prism_points = prism_points(13);
+        let pyramid_points = pyramid_points(14);
         let request = json!({
             "points2": points[0].iter().map(|x| [x[0], x[1]]).collect::<Vec<_>>(),
             "points3": points[1],
             "points_prism": prism_points,
+            "points_pyramid": pyramid_points,
         });
         let out = run_script("simplex_orders.py", &[request.to_string()]);
         let report = serde_json::from_slice(&out).unwrap_or_else(|e| panic!("bad JSON from simplex_orders.py: {e}"));
-        Fixture { points, prism_points, report }
+        Fixture { points, prism_points, pyramid_points, report }
     })
 }
 
@@ -237,6 +254,48 @@ fn gmsh_and_vtk_lagrange_prism_bases_are_ours() {
         }
     }
     eprintln!("Gmsh's and VTK's Lagrange prism bases and ours: largest difference {worst:.1e}");
+}
+
+/// Our Gmsh pyramid order puts every node where Gmsh's
+/// `getElementProperties` lists it (types 7, 14, 118, 119), and Gmsh's
+/// Lagrange pyramids (its `BergotBasis`) evaluate our equispaced pyramid
+/// basis at random points, function by function through the permutation
+/// (Gmsh's x and y run over [−1, 1]: its x and y derivatives are half
+/// ours).
+#[test]
+fn gmsh_pyramids_are_ours_node_for_node_and_function_for_function() {
+    use deformesh::mesh::element::pyramid;
+    let f = fixture();
+    let mut worst = 0.0f64;
+    for (p, t) in [7, 14, 118, 119].into_iter().enumerate().map(|(i, t)| (i + 1, t)) {
+        let g = &f.report["gmsh"][t.to_string()];
+        assert_eq!((g["dim"].as_u64(), g["order"].as_u64()), (Some(3), Some(p as u64)));
+        let perm = pyramid::gmsh_pyramid_order(p).unwrap();
+        let nodes = floats(&g["nodes"]);
+        let ours = pyramid::pyramid_nodes(p, Spacing::Equispaced).unwrap();
+        assert_eq!(nodes.len(), 3 * ours.len());
+        for (x, &l) in ours.iter().zip(&perm) {
+            let got = from_gmsh(Shape::Pyramid, std::array::from_fn(|c| nodes[3 * l + c]));
+            assert!((0..3).all(|c| (got[c] - x[c]).abs() < 1e-12), "Gmsh type {t}: local node {l} at {got:?}, ours at {x:?}");
+        }
+        let s = pyramid::space(p, Spacing::Equispaced).unwrap();
+        let n = s.num_nodes();
+        let (gv, gg) = (floats(&g["values"]), floats(&g["grads"]));
+        let (mut val, mut grad) = (vec![0.0; n], vec![[0.0; 3]; n]);
+        for (k, &xi) in f.pyramid_points.iter().enumerate() {
+            s.eval(xi, &mut val, &mut grad);
+            for a in 0..n {
+                let l = perm[a];
+                let mut diffs = vec![(gv[k * n + l] - val[a]).abs()];
+                let scale = [0.5, 0.5, 1.0];
+                diffs.extend((0..3).map(|c| (gg[3 * (k * n + l) + c] - scale[c] * grad[a][c]).abs()));
+                let err = diffs.into_iter().fold(0.0, f64::max);
+                assert!(err < 1e-10, "pyramid p={p} point {k} function {a}: off by {err:e}");
+                worst = worst.max(err);
+            }
+        }
+    }
+    eprintln!("Gmsh's Lagrange pyramid bases and ours: largest difference {worst:.1e}");
 }
 
 /// Gmsh's reference coordinates of `shape` in ours (module docs of

@@ -4,10 +4,12 @@
 Usage: simplex_orders.py REQUEST
 
 REQUEST is a JSON string {"points2": [[u, v], ...], "points3": [[u, v, w], ...],
-"points_prism": [[u, v, w], ...]}: points on the unit triangle and tetrahedron
-(Gmsh's and VTK's reference simplex, which is also ours) and on the unit
-triangle x [0, 1] (our prism and VTK's wedge; Gmsh's prism is the triangle x
-[-1, 1], the script maps w to 2 w - 1 for it) at which the Lagrange bases are
+"points_prism": [[u, v, w], ...], "points_pyramid": [[u, v, w], ...]}: points on
+the unit triangle and tetrahedron (Gmsh's and VTK's reference simplex, which is
+also ours), on the unit triangle x [0, 1] (our prism and VTK's wedge; Gmsh's
+prism is the triangle x [-1, 1], the script maps w to 2 w - 1 for it) and on
+our pyramid (base [0, 1]^2, apex (1/2, 1/2, 1); Gmsh's has the base [-1, 1]^2,
+the script maps u, v to 2 u - 1, 2 v - 1) at which the Lagrange bases are
 evaluated.
 
 Prints one JSON object:
@@ -15,9 +17,10 @@ Prints one JSON object:
                flattened (dim per node, getElementProperties), "values":
                getBasisFunctions "Lagrange" at the points ([point][function]),
                "grads": "GradLagrange" ([point][function][xyz])}} for the
-               triangles 2, 9, 21, 23, tetrahedra 4, 11, 29, 30 and prisms
+               triangles 2, 9, 21, 23, tetrahedra 4, 11, 29, 30, prisms
                6, 13 (4.15 has no nodal basis for the prisms 90, 91:
-               "FaceClosureFull not implemented for prisms of order 3")
+               "FaceClosureFull not implemented for prisms of order 3") and
+               pyramids 7, 14, 118, 119
   gmsh_meshed  {p: {"type", "nodes": Gmsh's reference coordinates (the
                unit triangle x [-1, 1]) of the nodes of the one prism Gmsh
                itself meshes at order p (an extruded triangle, setOrder), in
@@ -54,7 +57,7 @@ import gmsh
 import numpy as np
 import vtk
 
-TRIANGLES, TETS, PRISMS = [2, 9, 21, 23], [4, 11, 29, 30], [6, 13]
+TRIANGLES, TETS, PRISMS, PYRAMIDS = [2, 9, 21, 23], [4, 11, 29, 30], [6, 13], [7, 14, 118, 119]
 FAMILIES = {"Line": 1, "Triangle": 2, "Quadrangle": 2, "Tetrahedron": 3,
             "Hexahedron": 3, "Prism": 3, "Pyramid": 3}
 
@@ -70,12 +73,14 @@ def gmsh_points(request, t, dim):
     """The request's points of the cell of type t, in Gmsh's reference cell."""
     if t in PRISMS:
         return flat([[u, v, 2.0 * w - 1.0] for u, v, w in request["points_prism"]], 3)
+    if t in PYRAMIDS:
+        return flat([[2.0 * u - 1.0, 2.0 * v - 1.0, w] for u, v, w in request["points_pyramid"]], 3)
     return flat(request["points2"] if dim == 2 else request["points3"], dim)
 
 
 def gmsh_types(request):
     out = {}
-    for t in TRIANGLES + TETS + PRISMS:
+    for t in TRIANGLES + TETS + PRISMS + PYRAMIDS:
         name, dim, order, nn, coords, _ = gmsh.model.mesh.getElementProperties(t)
         pts = gmsh_points(request, t, dim)
         _, values, _ = gmsh.model.mesh.getBasisFunctions(t, pts, "Lagrange")

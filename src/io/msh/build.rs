@@ -169,33 +169,38 @@ impl Raw {
         Ok((mesh, cells.iter().map(|c| c.0).collect()))
     }
 
-    /// Fails unless every cell of a solid with prisms is a prism or a
-    /// tetrahedron and every boundary element a triangle or a quad.
+    /// Fails unless every cell of a mixed solid is a tetrahedron, prism,
+    /// pyramid or hexahedron and every boundary element a triangle or a
+    /// quad.
     fn solid_kinds(&self) -> Result<(), MshError> {
         for b in self.blocks.iter().filter(|b| (2..=3).contains(&b.kind.dim)) {
             let (what, expected) = if b.kind.dim == 3 { ("cells", Shape::Prism) } else { ("boundary elements", Shape::Triangle) };
-            if !matches!((b.kind.dim, b.kind.shape), (3, Shape::Tetrahedron | Shape::Prism) | (2, Shape::Triangle | Shape::Quadrilateral)) {
-                let why = "a solid with prisms holds prisms and tetrahedra (prism layers on tetrahedra), bounded by triangles and quads; hexes with prisms are not curved yet";
+            if !matches!((b.kind.dim, b.kind.shape), (3, Shape::Tetrahedron | Shape::Prism | Shape::Pyramid | Shape::Hexahedron) | (2, Shape::Triangle | Shape::Quadrilateral)) {
+                let why = "a mixed solid holds tetrahedra, prisms, pyramids and hexes, bounded by triangles and quads";
                 return Err(MshError::MixedShapes { at: b.at, what, expected, found: b.kind.shape, why });
             }
         }
         Ok(())
     }
 
-    /// The linear solid of tetrahedra and prisms (boundary triangles and
-    /// quads), cells in tag order, and its cells' element tags.
+    /// Whether the solid cells are of more than one kind, or prisms or
+    /// pyramids (which only the mixed solid holds).
+    pub fn is_mixed_solid(&self) -> bool {
+        let shapes = self.cell_shapes(3);
+        shapes.len() > 1 || shapes.iter().any(|s| matches!(s, Shape::Prism | Shape::Pyramid))
+    }
+
+    /// The linear solid of tetrahedra, prisms, pyramids and hexes
+    /// (boundary triangles and quads), cells in tag order, and its cells'
+    /// element tags.
     pub fn mixed_solid_mesh(&self) -> Result<(MixedSolidMesh, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
         self.solid_kinds()?;
         let cells = self.by_tag(3);
         let (part_names, faces) = self.boundary(2);
-        let cell = |n: &[usize]| match n.len() {
-            4 => SolidCell::Tet([n[0], n[1], n[2], n[3]]),
-            _ => SolidCell::Prism([n[0], n[1], n[2], n[3], n[4], n[5]]),
-        };
         let mesh = MixedSolidMesh {
             nodes: self.nodes.clone(),
-            cells: cells.iter().map(|c| cell(c.2)).collect(),
+            cells: cells.iter().map(|c| SolidCell::from_nodes(c.2).expect("a solid kind's vertex count")).collect(),
             faces: faces.iter().map(|&(nodes, part, _)| (nodes.to_vec(), part)).collect(),
             part_names,
         };
@@ -218,7 +223,7 @@ impl Raw {
         let shape = first.kind.shape;
         if D == 2 {
             self.plane_kinds()?;
-        } else if self.cell_shapes(D).contains(&Shape::Prism) {
+        } else if self.is_mixed_solid() {
             self.solid_kinds()?;
         } else {
             self.one_shape(D, shape)?;

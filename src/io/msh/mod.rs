@@ -49,7 +49,7 @@ const LINEAR: [Accept; 2] = [
     Accept {
         max_dim: 3,
         max_order: 1,
-        phrase: "only linear meshes: 1 = 2-node line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 6 = 6-node prism, 15 = point",
+        phrase: "only linear meshes: 1 = 2-node line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 6 = 6-node prism, 7 = 5-node pyramid, 15 = point",
     },
 ];
 
@@ -59,7 +59,8 @@ const CURVED: [Accept; 2] = [
     Accept { max_dim: 3, max_order: 4, phrase: ACCEPTED },
 ];
 const ACCEPTED: &str = "Lagrange triangles 2/9/21/23 or quads 3/10/36/37 with lines 1/8/26/27 (2D), \
-                        tetrahedra 4/11/29/30, hexes 5/12/92/93 or prisms 6/13/90/91 with triangles or quads (3D), points 15";
+                        tetrahedra 4/11/29/30, hexes 5/12/92/93, prisms 6/13/90/91 and pyramids 7/14/118/119, \
+                        alone or together, with triangles or quads (3D), points 15";
 
 /// How to turn another MSH flavour into one this reader accepts.
 const RESAVE_HINT: &str = "re-save it as ASCII MSH 4.1, e.g. `gmsh IN.msh -save -format msh41 -o OUT.msh`";
@@ -249,13 +250,14 @@ fn shown(token: &str, quote: &str) -> String {
 }
 
 /// What to do instead of an element type the reader refuses: for
-/// tetrahedra, prisms and pyramids (not curved yet), and for elements of
-/// order > 1 (`curve` places the high-order nodes itself).
+/// serendipity elements, and for elements of order > 1 (`curve` places the
+/// high-order nodes itself).
 fn recombine_hint(element_type: i64) -> String {
     let high_order = match element_type {
         8 | 26 | 27 => Some(("line", [8, 26, 27].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
         10 | 36 | 37 => Some(("quad", [10, 36, 37].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
         12 | 92 | 93 => Some(("hexahedron", [12, 92, 93].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
+        14 | 118 | 119 => Some(("pyramid", [14, 118, 119].iter().position(|&t| t == element_type).map_or(2, |i| i + 2))),
         16 => Some(("serendipity quad", 2)),
         17 => Some(("serendipity hexahedron", 2)),
         _ => None,
@@ -269,7 +271,7 @@ fn recombine_hint(element_type: i64) -> String {
     }
     match element_type {
         20 | 22 | 24 | 25 => ". Serendipity and incomplete triangles are not read: give `curve` the linear mesh (type 2)".into(),
-        7 | 14 | 19 | 118 => ". Pyramids are not curved yet: deformesh curves triangles and quads in 2D, tetrahedra, hexes and prisms (with tetrahedra) in 3D".into(),
+        19 => ". Type 19 is the 13-node (serendipity) pyramid: give `curve` the linear mesh (type 7)".into(),
         18 => ". Type 18 is the 15-node (serendipity) prism: give `curve` the linear mesh (type 6)".into(),
         _ => String::new(),
     }
@@ -358,7 +360,7 @@ pub enum AnyMesh {
     Tetrahedra(TetMesh),
     /// Linear quads and triangles together.
     Mixed2(crate::mesh::MixedPlaneMesh),
-    /// Linear prisms, alone or with tetrahedra.
+    /// Linear solids of more than one kind, or of prisms or pyramids.
     Mixed3(crate::mesh::MixedSolidMesh),
     /// Quads or triangles of order 2..=4.
     Curved2(CurvedMesh<2>),
@@ -387,7 +389,7 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
     let (mesh, cell_tags) = match (top, order) {
-        (3, 1) if raw.cell_shapes(3).contains(&Shape::Prism) => raw.mixed_solid_mesh().map(|(m, t)| (AnyMesh::Mixed3(m), t))?,
+        (3, 1) if raw.is_mixed_solid() => raw.mixed_solid_mesh().map(|(m, t)| (AnyMesh::Mixed3(m), t))?,
         (3, 1) if raw.cell_shape(3) == Some(Shape::Tetrahedron) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Tetrahedra(m), t))?,
         (3, 1) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,

@@ -247,8 +247,8 @@ fn rejects_wrong_counts() {
 
 #[test]
 fn rejects_unknown_element_types() {
-    // a pyramid block (type 7: no row of the table yet)
-    assert_rejected("\n2 1 3 1\n", "\n2 1 7 1\n", &["element type 7", "Pyramids are not curved yet"]);
+    // a 13-node (serendipity) pyramid block (type 19: no row of the table)
+    assert_rejected("\n2 1 3 1\n", "\n2 1 19 1\n", &["element type 19", "13-node (serendipity) pyramid", "linear mesh (type 7)"]);
 }
 
 #[test]
@@ -425,14 +425,14 @@ fn hex_reader_names_unnamed_surfaces_and_skips_lines() {
 #[test]
 fn hex_reader_errors() {
     let text = hex_msh_string(&HexMesh::structured_box([0.0; 3], [1.0; 3], [1, 1, 1]));
-    // pyramids cannot be stored
-    let bad = text.replacen("\n2 1 3 1\n", "\n2 1 7 1\n", 1);
-    let line = bad.lines().position(|l| l == "2 1 7 1").unwrap() + 1;
+    // serendipity pyramids cannot be stored
+    let bad = text.replacen("\n2 1 3 1\n", "\n2 1 19 1\n", 1);
+    let line = bad.lines().position(|l| l == "2 1 19 1").unwrap() + 1;
     let msg = parse_hex_msh(&bad).unwrap_err().to_string();
     let start = format!(
-        "line {line}: unsupported element type 7 (only linear meshes: 1 = 2-node \
-         line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 6 = 6-node prism, 15 = point). \
-         Pyramids are not curved yet"
+        "line {line}: unsupported element type 19 (only linear meshes: 1 = 2-node \
+         line, 2 = 3-node triangle, 3 = 4-node quad, 4 = 4-node tetrahedron, 5 = 8-node hexahedron, 6 = 6-node prism, 7 = 5-node pyramid, 15 = point). \
+         Type 19 is the 13-node (serendipity) pyramid"
     );
     assert!(msg.starts_with(&start), "{msg}");
     // a hex naming a node that does not exist

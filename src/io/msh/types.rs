@@ -2,18 +2,19 @@
 //! the permutation from the crate's node order to Gmsh's local one. Every
 //! reader and writer of the MSH formats asks this table and nothing else.
 
-use crate::mesh::element::{gmsh_hex_order, gmsh_line_order, gmsh_quad_order, prism, simplex, Shape};
+use crate::mesh::element::{gmsh_hex_order, gmsh_line_order, gmsh_quad_order, prism, pyramid, simplex, Shape};
 
 /// MSH element types per shape, orders 1..=4 (index `p − 1`): Gmsh's
 /// complete Lagrange elements (`MSH_PRI_18`, not the 15-node serendipity
-/// prism 18). Pyramids have no row.
-pub const MSH_TYPES: [(Shape, [i64; 4]); 6] = [
+/// prism 18; `MSH_PYR_14`, not the 13-node pyramid 19).
+pub const MSH_TYPES: [(Shape, [i64; 4]); 7] = [
     (Shape::Line, [1, 8, 26, 27]),
     (Shape::Triangle, [2, 9, 21, 23]),
     (Shape::Quadrilateral, [3, 10, 36, 37]),
     (Shape::Tetrahedron, [4, 11, 29, 30]),
     (Shape::Hexahedron, [5, 12, 92, 93]),
     (Shape::Prism, [6, 13, 90, 91]),
+    (Shape::Pyramid, [7, 14, 118, 119]),
 ];
 
 /// The MSH type of a point.
@@ -38,7 +39,8 @@ pub fn shape_of(t: i64) -> Option<(Shape, usize)> {
 
 /// Gmsh's local order of a `shape` element of order `p`, as a
 /// permutation from the crate's order (tensor order, the simplex lattice
-/// order, or the prism's of [`prism`]): `perm[ours] = Gmsh's local number`.
+/// order, or the prism's of [`prism`] and the pyramid's of [`pyramid`]):
+/// `perm[ours] = Gmsh's local number`.
 ///
 /// # Panics
 /// For a shape or order outside the table (the readers and writers only
@@ -53,7 +55,7 @@ pub fn gmsh_perm(shape: Shape, p: usize) -> Vec<usize> {
         Shape::Triangle => simplex::gmsh_triangle_order(p).expect(ok),
         Shape::Tetrahedron => simplex::gmsh_tet_order(p).expect(ok),
         Shape::Prism => prism::gmsh_prism_order(p).expect(ok),
-        Shape::Pyramid => panic!("no MSH row for {shape:?}"),
+        Shape::Pyramid => pyramid::gmsh_pyramid_order(p).expect(ok),
     }
 }
 
@@ -75,9 +77,9 @@ mod tests {
             }
         }
         assert_eq!(shape_of(15), Some((Shape::Point, 1)));
-        assert_eq!(shape_of(7), None, "pyramids have no row");
+        assert_eq!(shape_of(19), None, "nor has the 13-node pyramid");
         assert_eq!(shape_of(18), None, "nor has the serendipity prism");
-        assert_eq!(msh_type(Shape::Pyramid, 1), None);
+        assert_eq!(msh_type(Shape::Pyramid, 3), Some(118));
         assert_eq!(msh_type(Shape::Triangle, 5), None);
     }
 }
