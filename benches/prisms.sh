@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Issue 24 benchmark: deformesh `curve` against Gmsh's setOrder,
-# FastCurving and Elastic on the prism meshes of the issue
-# (tests/python/prism_meshes.py at its default sizes), in one run.
+# FastCurving and Elastic on the prism meshes of the issue and the
+# hex-dominant mesh with pyramids (tests/python/prism_meshes.py at its
+# default sizes), in one run.
 #
 # Usage: benches/prisms.sh [REPEAT]     (default 3; medians of times)
 #
 # Environment: DEFORMESH (default target/release/deformesh), PYTHON
 # (default .venv/bin/python), CASES (default "extruded:1e-4 extruded:1e-5
-# ballprism:1e-3": kind and first layer), ORDERS (default "2 3"), METHODS
+# ballprism:1e-3 hexpyr:-": kind and first layer, - for none), ORDERS (default "2 3"), METHODS
 # (Gmsh's, default "setorder fastcurving elastic"), GMSH_TIMEOUT (seconds
 # per Gmsh run, default 300: Elastic takes 100–150 s on the extruded
 # layers).
@@ -23,7 +24,7 @@ cd "$(dirname "$0")/.."
 REPEAT=${1:-3}
 DEFORMESH=${DEFORMESH:-target/release/deformesh}
 PYTHON=${PYTHON:-.venv/bin/python}
-CASES=${CASES:-"extruded:1e-4 extruded:1e-5 ballprism:1e-3"}
+CASES=${CASES:-"extruded:1e-4 extruded:1e-5 ballprism:1e-3 hexpyr:-"}
 ORDERS=${ORDERS:-"2 3"}
 METHODS=${METHODS:-"setorder fastcurving elastic"}
 GMSH_TIMEOUT=${GMSH_TIMEOUT:-300}
@@ -36,17 +37,20 @@ name = "sphere"
 kind = "curve"
 shape = { type = "sphere", centre = [0.0, 0.0, 0.0], radius = 0.5 }'
 printf '%s\n' "$SPHERE" > "$DIR/sphere.toml"
+printf '%s\n' "${SPHERE/\[0.0, 0.0, 0.0\], radius = 0.5/[1.5, 0.5, 0.5], radius = 0.25}" > "$DIR/hexpyr.toml"
 printf '| mesh | p | method | elements | invalid | min scaled J | boundary error | seconds (median of %s) | peak MiB |\n|---|---|---|---|---|---|---|---|---|\n' "$REPEAT"
 for c in $CASES; do
     kind=${c%%:*}; first=${c##*:}; msh=$DIR/${kind}_${first}.msh
     geometry=tests/data/extruded_cylinder.geometry.toml; group=wall
     [[ $kind == ballprism ]] && { geometry=$DIR/sphere.toml; group=sphere; }
-    "$PYTHON" tests/python/prism_meshes.py "$kind" "$msh" --first "$first" 2> /dev/null
+    [[ $kind == hexpyr ]] && { geometry=$DIR/hexpyr.toml; group=sphere; }
+    layer=(--first "$first"); [[ $first == - ]] && layer=()
+    "$PYTHON" tests/python/prism_meshes.py "$kind" "$msh" "${layer[@]}" 2> /dev/null
     for p in $ORDERS; do
         for method in $METHODS; do
             times=(); g=""
             for _ in $(seq "$REPEAT"); do
-                g=$(timeout "$GMSH_TIMEOUT" "$PYTHON" tests/python/prism_meshes.py "$kind" "$DIR/g.msh" --first "$first" --order "$p" --method "$method" --vtu "$DIR/g.vtu" 2> /dev/null) || true
+                g=$(timeout "$GMSH_TIMEOUT" "$PYTHON" tests/python/prism_meshes.py "$kind" "$DIR/g.msh" "${layer[@]}" --order "$p" --method "$method" --vtu "$DIR/g.vtu" 2> /dev/null) || true
                 [[ -z $g ]] && break
                 times+=("$(echo "$g" | "$PYTHON" -c 'import json,sys; print(json.load(sys.stdin)["seconds"])')")
             done

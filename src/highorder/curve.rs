@@ -700,7 +700,12 @@ pub fn curve_mixed_solid(coarse: &MixedSolidMesh, parts: &[BoundaryPart<3>], opt
     let parts = on_shape_parts(&coarse.nodes, &coarse.faces, &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed_solid(coarse, opts.order, opts.spacing)?;
-    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
+    let mut curved = curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))?;
+    // the hexes' sub-cell centres, after every element node, were
+    // Algorithm 2's alone
+    let element_nodes = sub.elements.iter().flatten().max().map_or(0, |&n| n + 1);
+    curved.mesh.nodes.truncate(element_nodes);
+    Ok(curved)
 }
 
 /// A tangle of Algorithm 2 named by the coarse cells (`owner` of each
