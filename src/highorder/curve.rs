@@ -459,13 +459,20 @@ fn prism_faces(p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
 /// [`crate::mesh::element::pyramid`], faces of [`Shape::faces`]): each
 /// node with the node `depth` steps in along the lattice axis that leaves
 /// its face (up from the base, across the square layer from a triangle),
-/// kept in the lattice (towards the apex the layers narrow).
+/// kept in the lattice (towards the apex the layers narrow); the apex, on
+/// all four triangles, with a node of the layer below off the face.
 fn pyramid_faces(p: usize, depth: usize) -> Vec<Vec<(usize, usize, bool)>> {
     use crate::mesh::element::pyramid::{face_nodes, lattice, lattice_index, vertex_nodes};
     let lat = lattice(p);
     let vertices = vertex_nodes(p);
     let inward = |face: usize, [i, j, k]: [usize; 3]| -> [usize; 3] {
         let n = p - k;
+        if n == 0 && face < 4 {
+            // the apex, on every lateral face: a node of the layer below
+            // off the face
+            let [i, j] = [[0, 1], [1, 0], [0, 0], [0, 0]][face];
+            return [i, j, p - 1];
+        }
         match face {
             // (0,1,4) at j = 0; (3,0,4) at i = 0; (1,2,4) at i = n; (2,3,4) at j = n
             0 => [i, j + depth.min(n), k],
@@ -1615,6 +1622,37 @@ mod tests {
                 Ok(())
             })
             .unwrap();
+    }
+
+    /// The faces of a pyramid list each face's nodes once, the inner node
+    /// `depth` steps in is in the pyramid and off the face (the apex from
+    /// the base at depth p), and the corner flags mark its vertices.
+    #[test]
+    fn pyramid_faces_step_into_the_pyramid() {
+        use crate::mesh::element::pyramid;
+        for p in 1..=4 {
+            let x = pyramid::pyramid_nodes(p, Spacing::Equispaced).unwrap();
+            for depth in [1, p] {
+                let faces = element_faces::<3>(Shape::Pyramid, p, depth);
+                assert_eq!(faces.len(), 5);
+                for (f, face) in faces.iter().enumerate() {
+                    let (shape, loop_) = Shape::Pyramid.faces()[f];
+                    assert_eq!(face.len(), shape.num_nodes(p));
+                    assert_eq!(face.iter().filter(|n| n.2).count(), loop_.len(), "p = {p} face {f}");
+                    // the inner node is off the face's plane, on its inner side
+                    let v = Shape::Pyramid.vertices();
+                    let (a, b, c) = (v[loop_[0]], v[loop_[1]], v[loop_[loop_.len() - 1]]);
+                    let normal = crate::numeric::cross3(crate::numeric::sub(b, a), crate::numeric::sub(c, a));
+                    for &(on, inner, _) in face {
+                        let h = |n: usize| crate::numeric::dot(normal, crate::numeric::sub(x[n], a));
+                        assert!(h(on).abs() < 1e-14, "p = {p} face {f}: node {on} off its face");
+                        assert!(h(inner) < -1e-14, "p = {p} face {f} depth {depth}: node {inner} not inside");
+                    }
+                }
+                let apex = pyramid::vertex_nodes(p)[4];
+                assert_eq!(faces[4].iter().any(|n| n.1 == apex), depth == p, "p = {p} depth {depth}");
+            }
+        }
     }
 
     #[test]
