@@ -19,6 +19,7 @@
 
 pub mod certify;
 pub mod prism;
+pub mod pyramid;
 pub mod simplex;
 
 use crate::jacobian::{lift, JacobianField, Normalisation};

@@ -270,7 +270,7 @@ fn det2<const D: usize>(col: &[[Bezier; D]; D], abs: &[[Bezier; D]; D]) -> (Bezi
 }
 
 /// `det J = a · (b × c)` (columns), its companion and its rounding count.
-fn det3<const D: usize>(col: &[[Bezier; D]; D], abs: &[[Bezier; D]; D]) -> (Bezier, Bezier, usize) {
+pub(crate) fn det3<const D: usize>(col: &[[Bezier; D]; D], abs: &[[Bezier; D]; D]) -> (Bezier, Bezier, usize) {
     let triple = |cols: &[[Bezier; D]; D], s: f64| {
         let (a, b, c) = (&cols[0], &cols[1], &cols[2]);
         // b × c, each component of degree (2p, 2p−1, 2p−1)
@@ -387,7 +387,7 @@ impl Ord for BoxItem {
 /// best value found, or certainly positive for [`Goal::Sign`]). The search
 /// runs on the computed coefficients; the rounding bounds are applied to
 /// its result. For [`Goal::Sign`] the minimum is positive iff `lower > 0`.
-fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64, f64, usize) {
+pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64, f64, usize) {
     // a coordinate that is not finite leaves coefficients NaN, which the
     // min and max folds would skip: no bound, never valid
     if !poly.coef.iter().all(|c| c.is_finite()) || !err.is_finite() {
@@ -608,7 +608,7 @@ pub fn invalid_mixed_cells(mesh: &crate::mesh::MixedPlaneMesh) -> Vec<usize> {
 /// The certifier of one kind and order of element, whatever the kind:
 /// the one API the method and the readers use (tensor Bernstein bounds on
 /// quads and hexes, simplex ones on triangles and tetrahedra, the product
-/// of the two on prisms).
+/// of the two on prisms, tensor ones in the collapsed cube on pyramids).
 pub enum ElementCertifier {
     /// Quads and hexes.
     Tensor(Certifier),
@@ -616,11 +616,16 @@ pub enum ElementCertifier {
     Simplex(super::simplex::SimplexCertifier),
     /// Prisms (wedges).
     Prism(super::prism::PrismCertifier),
+    /// Pyramids.
+    Pyramid(super::pyramid::PyramidCertifier),
 }
 
 impl ElementCertifier {
     /// For order-`p` elements of `shape` with nodes at `spacing`.
     pub fn new(shape: crate::mesh::element::Shape, p: usize, spacing: Spacing) -> Result<Self, HighOrderError> {
+        if shape == crate::mesh::element::Shape::Pyramid {
+            return Ok(ElementCertifier::Pyramid(super::pyramid::PyramidCertifier::new(p, spacing)?));
+        }
         if shape == crate::mesh::element::Shape::Prism {
             let space = crate::mesh::element::prism::space(p, spacing)?;
             return Ok(ElementCertifier::Prism(super::prism::PrismCertifier::new(p, &space.nodes)?));
@@ -638,6 +643,7 @@ impl ElementCertifier {
             ElementCertifier::Tensor(c) => c.is_valid(ctrl),
             ElementCertifier::Simplex(c) => c.is_valid(ctrl),
             ElementCertifier::Prism(c) => c.is_valid(ctrl),
+            ElementCertifier::Pyramid(c) => c.is_valid(ctrl),
         }
     }
 
@@ -647,6 +653,7 @@ impl ElementCertifier {
             ElementCertifier::Tensor(c) => c.certify(ctrl, opts),
             ElementCertifier::Simplex(c) => c.certify(ctrl, opts),
             ElementCertifier::Prism(c) => c.certify(ctrl, opts),
+            ElementCertifier::Pyramid(c) => c.certify(ctrl, opts),
         }
     }
 }

@@ -53,20 +53,33 @@ fn group_off<const D: usize>(file: &Path, group: &str, distance: impl Fn([f64; D
 /// The real Gmsh reads `file` and finds every 3D element valid, with
 /// `counts` elements of each MSH type; its minDetJac (a lower bound; on
 /// prisms half ours: its reference prism is twice as tall) never above a
-/// value our det J takes. Returns the number of elements it judged.
+/// value our det J takes — on pyramids, where Gmsh's figure is not a
+/// bound, Gmsh's det J sampled on the element never below our lower bound
+/// and its least within 1 % of ours. Returns the number of elements it
+/// judged.
 fn gmsh_agrees(file: &Path, counts: &[(i64, usize)]) -> usize {
     let g = common::run_checker("check_msh.py", file);
     for &(ty, count) in counts {
         assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
     }
     let block = &g["elements_3d"];
-    let (gmin, types) = (common::floats(&block["minDetJac"]), common::floats(&block["types"]));
+    let (gmin, types, gsampled) = (common::floats(&block["minDetJac"]), common::floats(&block["types"]), common::floats(&block["sampledMinDet"]));
     let ours = common::our_certificates::<3>(file);
     assert_eq!(gmin.len(), ours.len());
     for (k, ((g, ty), o)) in gmin.iter().zip(&types).zip(&ours).enumerate() {
         let scale = gmsh_det_scale(*ty);
         assert!(*g > 0.0 && o.valid, "element {k} (type {ty}): Gmsh's minDetJac {g}, ours {o:?}");
-        assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k}: Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
+        if gmsh_det_scale(*ty) == 0.25 {
+            // Gmsh's minDetJac of a pyramid is no lower bound: its own
+            // getJacobian finds det J up to 1 % below it on the element
+            // (this mesh at p = 2 and 3). Its Jacobians at its sample
+            // points are what we bound
+            let sampled = gsampled[k];
+            assert!(scale * o.min_det_lower <= sampled * (1.0 + 1e-7), "element {k} (type {ty}): our lower bound {} above Gmsh's sampled det J {sampled}", scale * o.min_det_lower);
+            assert!(sampled >= scale * o.min_det_upper * (1.0 - 1e-2), "element {k} (type {ty}): Gmsh's sampled det J {sampled}, ours attains {}", scale * o.min_det_upper);
+        } else {
+            assert!(*g <= scale * o.min_det_upper * (1.0 + 1e-9), "element {k} (type {ty}): Gmsh's bound {g} above an attained value {}", scale * o.min_det_upper);
+        }
     }
     gmin.len()
 }

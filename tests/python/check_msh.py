@@ -13,12 +13,15 @@ Prints one JSON object:
                    every 2D element whatever its type (a mixed mesh of
                    quadrangles and triangles: both blocks), ordered by
                    element tag; types the MSH type number of each;
-                   minSJ is Gmsh's lower bound, sampledSJ the least
+                   minSJ is Gmsh's lower bound, sampledMinDet the least
+                   det J of Gmsh's getJacobians on the points below,
+                   sampledSJ the least
                    signed det J / (|dx/du| |dx/dv| (|dx/dw|)) of Gmsh's
                    own Jacobians on the points of the reference element
                    of spacing 1 / (3p) (corners included: (3p + 1)^dim for
                    quads and hexes, the simplex lattice for triangles and
-                   tets, where the ratio is the raw one on Gmsh's
+                   tets, the triangle's times the line's for prisms, the
+                   pyramid's layers without its apex for pyramids, where the ratio is the raw one on Gmsh's
                    right-angled reference: an equilateral triangle gives
                    sin 60 degrees); elements_by_type {type number: {"name",
                    "count", "invalid" (minDetJac <= 0), "minSJ",
@@ -60,7 +63,7 @@ def elements(dim):
     for quality in ("minDetJac", "maxDetJac", "minSJ", "minSIGE"):
         values = gmsh.model.mesh.getElementQualities(all_tags, quality) if all_tags else []
         out[quality] = [float(v) for v in values]
-    out["sampledSJ"] = sampled_sj(dim, all_tags)
+    out["sampledSJ"], out["sampledMinDet"] = sampled_sj(dim, all_tags)
     by_type = {}
     for k, ty in enumerate(out["types"]):
         b = by_type.setdefault(str(ty), {"name": gmsh.model.mesh.getElementProperties(ty)[0], "count": 0, "invalid": 0,
@@ -84,6 +87,17 @@ def reference_points(t):
     if nv == dim + 1:  # a simplex
         pts = [p for p in np.ndindex(*([m + 1] * dim)) if sum(p) <= m]
         grid = np.array(pts, dtype=float) / m
+    elif nv == 6:  # a prism: the triangle's lattice times [-1, 1]
+        tri = [(i / m, j / m) for i, j in np.ndindex(m + 1, m + 1) if i + j <= m]
+        grid = np.array([(u, v, w) for u, v in tri for w in np.linspace(-1.0, 1.0, m + 1)])
+    elif nv == 5:  # a pyramid: its layers, the apex (no single J) left out
+        # 1e-9 in from the sides: Gmsh 4.15's GradLagrange of a pyramid
+        # jumps by 1e-3 relative within a few ulps of a side (at z = 1/3,
+        # p = 3: 1.39666e-3, 1.39444e-3, 1.39406e-3 at x = y = 1 - z - k
+        # ulps, k = 0, 1, 2; continuous 1e-9 in)
+        s = 1.0 - 1e-9
+        grid = np.array([(s * (-(1 - k / m) + 2 * i / m), s * (-(1 - k / m) + 2 * j / m), k / m)
+                         for k in range(m) for i in range(m - k + 1) for j in range(m - k + 1)])
     else:
         g = np.linspace(-1.0, 1.0, m + 1)
         grid = np.array(np.meshgrid(*[g] * dim, indexing="ij")).reshape(dim, -1).T
@@ -92,7 +106,7 @@ def reference_points(t):
 
 def sampled_sj(dim, all_tags):
     """Per element (in the order of all_tags), the least scaled Jacobian
-    of Gmsh's own Jacobians on reference_points."""
+    and the least det J of Gmsh's own Jacobians on reference_points."""
     import numpy as np  # only here: the rest of the checker needs no numpy
 
     by_tag = {}
@@ -121,8 +135,8 @@ def sampled_sj(dim, all_tags):
             c = np.cross(j[:, :, 0, :], j[:, :, 1, :])
             d = np.linalg.norm(c, axis=2) * np.sign(np.einsum("eqc,ec->eq", c, n))
         sj = (d / np.linalg.norm(j[:, :, :dim, :], axis=3).prod(axis=2)).min(axis=1)
-        by_tag.update(zip((int(x) for x in tags), (float(v) for v in sj)))
-    return [by_tag[t] for t in all_tags]
+        by_tag.update(zip((int(x) for x in tags), ((float(v), float(w)) for v, w in zip(sj, d.min(axis=1)))))
+    return [by_tag[t][0] for t in all_tags], [by_tag[t][1] for t in all_tags]
 
 
 def main():
