@@ -461,14 +461,14 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
                 elements.push(el);
             }
             SolidCell::Prism(corners) => {
-                let el = prism_element(c, corners, &coarse.nodes, (&prism_lattice, &prism_space.nodes, p), &mut ids, &mut nodes);
+                let el = keyed_element((c, corners, &coarse.nodes), (&prism_lattice, &prism_space.nodes, p), prism_key, prism_point, &mut ids, &mut nodes);
                 for s in &sub_prisms {
                     sub_cells.extend(prism_tets(s.map(|a| el[a])));
                 }
                 elements.push(el);
             }
             SolidCell::Pyramid(corners) => {
-                let el = pyramid_element(c, corners, &coarse.nodes, (&pyramid_lattice, &pyramid_space.nodes, p), &mut ids, &mut nodes);
+                let el = keyed_element((c, corners, &coarse.nodes), (&pyramid_lattice, &pyramid_space.nodes, p), pyramid_key, pyramid_point, &mut ids, &mut nodes);
                 for s in &sub_pyramids {
                     sub_cells.extend(pyramid_tets(s.map(|a| el[a])));
                 }
@@ -504,14 +504,15 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
     Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
 }
 
-/// The fine nodes of prism `c` with corners `cell` (lattice order of
-/// [`prism`]), made or found by their keys; `(lattice, xi, p)` as for
+/// The fine nodes of prism or pyramid `c` with corners `cell` (lattice
+/// order of [`prism`] or [`pyramid`]), made or found by their `key`s, new
+/// ones at `point` of the linear cell; `(lattice, xi, p)` as for
 /// [`simplex_element`].
-fn prism_element(
-    c: usize,
-    cell: &[usize; 6],
-    at: &[[f64; 3]],
+fn keyed_element<const V: usize>(
+    (c, cell, at): (usize, &[usize; V], &[[f64; 3]]),
     (lattice, xi, p): (&[[usize; 3]], &[[f64; 3]], usize),
+    key: fn(usize, &[usize; V], [usize; 3], usize) -> Key,
+    point: fn(&[[f64; 3]; V], [f64; 3]) -> [f64; 3],
     ids: &mut HashMap<Key, usize>,
     nodes: &mut Vec<[f64; 3]>,
 ) -> Vec<usize> {
@@ -520,32 +521,8 @@ fn prism_element(
         .iter()
         .zip(xi)
         .map(|(idx, xi)| {
-            *ids.entry(prism_key(c, cell, *idx, p)).or_insert_with(|| {
-                nodes.push(prism_point(&corners, *xi));
-                nodes.len() - 1
-            })
-        })
-        .collect()
-}
-
-/// The fine nodes of pyramid `c` with corners `cell` (lattice order of
-/// [`pyramid`]), made or found by their keys; `(lattice, xi, p)` as for
-/// [`simplex_element`].
-fn pyramid_element(
-    c: usize,
-    cell: &[usize; 5],
-    at: &[[f64; 3]],
-    (lattice, xi, p): (&[[usize; 3]], &[[f64; 3]], usize),
-    ids: &mut HashMap<Key, usize>,
-    nodes: &mut Vec<[f64; 3]>,
-) -> Vec<usize> {
-    let corners = cell.map(|n| at[n]);
-    lattice
-        .iter()
-        .zip(xi)
-        .map(|(idx, xi)| {
-            *ids.entry(pyramid_key(c, cell, *idx, p)).or_insert_with(|| {
-                nodes.push(pyramid_point(&corners, *xi));
+            *ids.entry(key(c, cell, *idx, p)).or_insert_with(|| {
+                nodes.push(point(&corners, *xi));
                 nodes.len() - 1
             })
         })
@@ -1813,6 +1790,40 @@ mod tests {
         }
     }
 
+    /// The fine tetrahedra of a mixed solid's subdivision `s` of `coarse`
+    /// are positive and fill `volume`, no two fine nodes coincide, every
+    /// face is held twice (by two tetrahedra, or one and a fine boundary
+    /// facet: the cuts of a shared quad agree), and the elements keep
+    /// their kinds.
+    fn assert_conforming_tets(s: &Subdivision<TetMesh, 3>, coarse: &crate::mesh::MixedSolidMesh, volume: f64, what: &str) {
+        let vols: Vec<f64> = s.fine.cells.iter().map(|c| {
+            let x = c.map(|n| s.fine.nodes[n]);
+            let e = |a: usize| std::array::from_fn::<f64, 3, _>(|d| x[a][d] - x[0][d]);
+            crate::numeric::dot(crate::numeric::cross3(e(1), e(2)), e(3)) / 6.0
+        }).collect();
+        assert!(vols.iter().all(|&v| v > 0.0), "{what}: a negative fine tetrahedron");
+        assert!((vols.iter().sum::<f64>() - volume).abs() < 1e-13, "{what}");
+        let mut sorted = s.fine.nodes.clone();
+        sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert!(sorted.windows(2).all(|w| dist2(w[0], w[1]) > 1e-20), "{what}: two fine nodes at one point");
+        let mut held: HashMap<Vec<usize>, usize> = HashMap::new();
+        for t in &s.fine.cells {
+            for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+                let mut k = f.map(|a| t[a]).to_vec();
+                k.sort_unstable();
+                *held.entry(k).or_default() += 1;
+            }
+        }
+        for f in &s.fine.faces {
+            let mut k = f.nodes.to_vec();
+            k.sort_unstable();
+            *held.entry(k).or_default() += 1;
+        }
+        assert!(held.values().all(|&n| n == 2), "{what}: a face held once: the cuts of a shared quad differ");
+        let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
+        assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+    }
+
     /// A column of two prisms under six tetrahedra (the top layer's
     /// prisms cut by `prism_tets`), nodes numbered out of order: at every
     /// order the fine tetrahedra are positive, fill the column, and meet
@@ -1848,32 +1859,7 @@ mod tests {
             let (s, owner) = subdivide_mixed_solid(&coarse, p, Spacing::GaussLobatto).unwrap();
             assert_eq!(s.fine.cells.len(), 2 * 3 * p * p * p + 6 * p * p * p, "p = {p}");
             assert_eq!(owner.iter().filter(|&&c| c < 2).count(), 6 * p * p * p);
-            let vols: Vec<f64> = s.fine.cells.iter().map(|c| {
-                let x = c.map(|n| s.fine.nodes[n]);
-                let e = |a: usize| std::array::from_fn::<f64, 3, _>(|d| x[a][d] - x[0][d]);
-                crate::numeric::dot(crate::numeric::cross3(e(1), e(2)), e(3)) / 6.0
-            }).collect();
-            assert!(vols.iter().all(|&v| v > 0.0), "p = {p}: a negative fine tetrahedron");
-            assert!((vols.iter().sum::<f64>() - 2.0).abs() < 1e-13, "p = {p}");
-            let mut sorted = s.fine.nodes.clone();
-            sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            assert!(sorted.windows(2).all(|w| dist2(w[0], w[1]) > 1e-20), "p = {p}: two fine nodes at one point");
-            let mut held: HashMap<Vec<usize>, usize> = HashMap::new();
-            for t in &s.fine.cells {
-                for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
-                    let mut k = f.map(|a| t[a]).to_vec();
-                    k.sort_unstable();
-                    *held.entry(k).or_default() += 1;
-                }
-            }
-            for f in &s.fine.faces {
-                let mut k = f.nodes.to_vec();
-                k.sort_unstable();
-                *held.entry(k).or_default() += 1;
-            }
-            assert!(held.values().all(|&n| n == 2), "p = {p}: a face held once: the cuts of a shared quad differ");
-            let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
-            assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+            assert_conforming_tets(&s, &coarse, 2.0, &format!("p = {p}"));
             assert_eq!(s.elements[0].len(), Shape::Prism.num_nodes(p));
         }
     }
@@ -1931,32 +1917,7 @@ mod tests {
                 assert_eq!(owner.iter().filter(|&&c| c == 2).count(), (1..=p).map(|q| 2 * q * q + 2 * (q - 1) * (q - 1) + 2 * q * (q - 1)).sum::<usize>());
                 let last = s.elements.iter().flatten().max().unwrap() + 1;
                 assert_eq!(s.fine.nodes.len(), last + 2 * p3, "p = {p}: the centres come last");
-                let vols: Vec<f64> = s.fine.cells.iter().map(|c| {
-                    let x = c.map(|n| s.fine.nodes[n]);
-                    let e = |a: usize| std::array::from_fn::<f64, 3, _>(|d| x[a][d] - x[0][d]);
-                    crate::numeric::dot(crate::numeric::cross3(e(1), e(2)), e(3)) / 6.0
-                }).collect();
-                assert!(vols.iter().all(|&v| v > 0.0), "p = {p} {spacing:?}: a negative fine tetrahedron");
-                assert!((vols.iter().sum::<f64>() - volume).abs() < 1e-13, "p = {p}");
-                let mut sorted = s.fine.nodes.clone();
-                sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
-                assert!(sorted.windows(2).all(|w| dist2(w[0], w[1]) > 1e-20), "p = {p}: two fine nodes at one point");
-                let mut held: HashMap<Vec<usize>, usize> = HashMap::new();
-                for t in &s.fine.cells {
-                    for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
-                        let mut k = f.map(|a| t[a]).to_vec();
-                        k.sort_unstable();
-                        *held.entry(k).or_default() += 1;
-                    }
-                }
-                for f in &s.fine.faces {
-                    let mut k = f.nodes.to_vec();
-                    k.sort_unstable();
-                    *held.entry(k).or_default() += 1;
-                }
-                assert!(held.values().all(|&n| n == 2), "p = {p} {spacing:?}: a face held once: the cuts of a shared quad differ");
-                let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
-                assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+                assert_conforming_tets(&s, &coarse, volume, &format!("p = {p} {spacing:?}"));
             }
         }
     }

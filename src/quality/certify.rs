@@ -341,6 +341,26 @@ pub struct Certificate {
     pub splits: usize,
 }
 
+impl Certificate {
+    /// The certificate of a normalised element in `dim` dimensions scaled
+    /// by `s` ([`normalise`]): from the bracket `(lo, up)` of its min det J,
+    /// the lower bound `neg_lo` of −det J, the sampled `(min det J, min
+    /// scaled Jacobian)` and the splits used. `s` is a power of two:
+    /// scaling back is exact (unless the true value under- or overflows).
+    pub(crate) fn of_normalised(dim: usize, s: f64, (lo, up, neg_lo): (f64, f64, f64), (min_det, min_sj): (f64, f64), splits: usize) -> Certificate {
+        let unit = |x: f64| (0..dim).fold(x, |v, _| v * s);
+        Certificate {
+            valid: lo > 0.0,
+            min_det_lower: unit(lo),
+            min_det_upper: unit(up.min(min_det)),
+            max_det: unit(-neg_lo),
+            min_det_sampled: unit(min_det),
+            min_scaled_jacobian: min_sj,
+            splits,
+        }
+    }
+}
+
 /// What the branch and bound of [`bound_min`] is after.
 #[derive(Clone, Copy)]
 pub(crate) enum Goal {
@@ -510,18 +530,7 @@ impl Certifier {
             min_det = min_det.min(crate::mesh::element::basis::det(&j));
             min_sj = min_sj.min(scaled_det(&j));
         }
-        // s is a power of two: scaling back is exact (unless the true
-        // value under- or overflows)
-        let unit = |x: f64| (0..D).fold(x, |v, _| v * s);
-        Certificate {
-            valid: lo > 0.0,
-            min_det_lower: unit(lo),
-            min_det_upper: unit(up.min(min_det)),
-            max_det: unit(-neg_lo),
-            min_det_sampled: unit(min_det),
-            min_scaled_jacobian: min_sj,
-            splits: s1 + s2,
-        }
+        Certificate::of_normalised(D, s, (lo, up, neg_lo), (min_det, min_sj), s1 + s2)
     }
 }
 

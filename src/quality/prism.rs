@@ -460,18 +460,7 @@ impl PrismCertifier {
             None if m == self.samples.m => self.sample(&parts.col, &self.samples),
             None => self.sample(&parts.col, &Samples::new(self.p, m)),
         };
-        // s is a power of two: scaling back is exact (unless the true
-        // value under- or overflows)
-        let unit = |x: f64| x * s * s * s;
-        Certificate {
-            valid: lo > 0.0,
-            min_det_lower: unit(lo),
-            min_det_upper: unit(up.min(min_det)),
-            max_det: unit(-neg_lo),
-            min_det_sampled: unit(min_det),
-            min_scaled_jacobian: min_sj,
-            splits: s1 + s2,
-        }
+        Certificate::of_normalised(3, s, (lo, up, neg_lo), (min_det, min_sj), s1 + s2)
     }
 
     /// `(min det J, min scaled Jacobian)` of the normalised element over

@@ -257,16 +257,7 @@ impl PyramidCertifier {
             min_det = min_det.min(det(&j));
             min_sj = min_sj.min(scaled_det(&j));
         }
-        let unit = |x: f64| x * s * s * s;
-        Certificate {
-            valid: lo > 0.0,
-            min_det_lower: unit(lo),
-            min_det_upper: unit(up.min(min_det)),
-            max_det: unit(-neg_lo),
-            min_det_sampled: unit(min_det),
-            min_scaled_jacobian: min_sj,
-            splits: s1 + s2,
-        }
+        Certificate::of_normalised(3, s, (lo, up, neg_lo), (min_det, min_sj), s1 + s2)
     }
 }
 

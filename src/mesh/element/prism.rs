@@ -120,8 +120,14 @@ pub(super) fn combine(p: usize, [a, b, c]: [[usize; 3]; 3], s: usize, t: usize) 
 /// The lattice positions on edge `edge` of [`Shape::edges`] of the prism,
 /// from its first vertex to its second (`p + 1` of them).
 pub fn edge_nodes(p: usize, edge: usize) -> Vec<usize> {
-    let [a, b] = Shape::Prism.edges()[edge].map(|v| vertex_point(p, v));
-    (0..=p).map(|s| lattice_index(p, combine(p, [a, b, a], s, 0))).collect()
+    cell_edge_nodes(Shape::Prism, p, edge, lattice_index)
+}
+
+/// [`edge_nodes`] of a prism or a pyramid, whose lattice positions are
+/// `index`.
+pub(super) fn cell_edge_nodes(cell: Shape, p: usize, edge: usize, index: fn(usize, [usize; 3]) -> usize) -> Vec<usize> {
+    let [a, b] = cell.edges()[edge].map(|v| lattice_vertex(cell, p, v));
+    (0..=p).map(|s| index(p, combine(p, [a, b, a], s, 0))).collect()
 }
 
 /// The lattice positions on face `face` of [`Shape::faces`] of the prism,
@@ -132,10 +138,16 @@ pub fn edge_nodes(p: usize, edge: usize) -> Vec<usize> {
 /// [`simplex`], a quadrilateral face in tensor order (`s + (p+1) t`), like
 /// [`simplex::face_nodes`] and a hex's faces.
 pub fn face_nodes(p: usize, face: usize) -> Vec<usize> {
-    let (shape, loop_) = Shape::Prism.faces()[face];
-    let v = |k: usize| vertex_point(p, loop_[k]);
+    cell_face_nodes(Shape::Prism, p, face, lattice_index)
+}
+
+/// [`face_nodes`] of a prism or a pyramid, whose lattice positions are
+/// `index`.
+pub(super) fn cell_face_nodes(cell: Shape, p: usize, face: usize, index: fn(usize, [usize; 3]) -> usize) -> Vec<usize> {
+    let (shape, loop_) = cell.faces()[face];
+    let v = |k: usize| lattice_vertex(cell, p, loop_[k]);
     let frame = [v(0), v(1), v(loop_.len() - 1)];
-    face_points(shape, p).into_iter().map(|[s, t]| lattice_index(p, combine(p, frame, s, t))).collect()
+    face_points(shape, p).into_iter().map(|[s, t]| index(p, combine(p, frame, s, t))).collect()
 }
 
 /// The points `(s, t)` of an order-`q` face of `shape` in its own order:

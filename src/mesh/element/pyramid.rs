@@ -39,7 +39,7 @@
 
 use std::sync::OnceLock;
 
-use super::prism::{combine, face_interiors, face_points, gmsh_face_points, vertices_and_edges};
+use super::prism::{cell_edge_nodes, cell_face_nodes, face_interiors, face_points, gmsh_face_points, vertices_and_edges};
 use super::simplex;
 use super::{check_order, nodes_1d, HighOrderError, Shape, Spacing, MAX_ORDER};
 use crate::numeric::bezier::invert;
@@ -83,8 +83,7 @@ fn lattice_point(p: usize, [i, j, k]: [usize; 3]) -> [f64; 3] {
 /// The lattice positions on edge `edge` of [`Shape::edges`] of the pyramid,
 /// from its first vertex to its second (`p + 1` of them).
 pub fn edge_nodes(p: usize, edge: usize) -> Vec<usize> {
-    let [a, b] = Shape::Pyramid.edges()[edge].map(|v| vertex_point(p, v));
-    (0..=p).map(|s| lattice_index(p, combine(p, [a, b, a], s, 0))).collect()
+    cell_edge_nodes(Shape::Pyramid, p, edge, lattice_index)
 }
 
 /// The lattice positions on face `face` of [`Shape::faces`] of the
@@ -92,10 +91,7 @@ pub fn edge_nodes(p: usize, edge: usize) -> Vec<usize> {
 /// triangle's lattice order or a quadrilateral's tensor order, the first
 /// axis from the loop's first vertex to its second, the other to its last.
 pub fn face_nodes(p: usize, face: usize) -> Vec<usize> {
-    let (shape, loop_) = Shape::Pyramid.faces()[face];
-    let v = |k: usize| vertex_point(p, loop_[k]);
-    let frame = [v(0), v(1), v(loop_.len() - 1)];
-    face_points(shape, p).into_iter().map(|[s, t]| lattice_index(p, combine(p, frame, s, t))).collect()
+    cell_face_nodes(Shape::Pyramid, p, face, lattice_index)
 }
 
 /// The reference coordinates of the order-`p` nodes in lattice order: the
