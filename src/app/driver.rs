@@ -1106,10 +1106,6 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     // the cells in the readers' order, as c.mesh has them
     let view = layout.as_mesh::<D>();
     // the three outputs are independent and each mostly serial: side by side
-    // the 3D pictures draw one kind of cell: a prism layer with
-    // tetrahedra outside is written without its picture (the report's
-    // `outputs` list what was written)
-    let drawn = D == 2 || !c.mesh.is_mixed();
     // VTK has no cell for a curved pyramid: such a mesh is written
     // without its VTU, as the report's `outputs` say
     let vtk = crate::io::vtu::vtk_can_hold(&c.mesh);
@@ -1118,16 +1114,14 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     }
     let ((main, vtu), png) = rayon::join(
         || rayon::join(|| main_file(job.format, &layout, &view), || vtk.then(|| c.mesh.vtu_string_with_attributes(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)], &view.1)).transpose()),
-        || -> Result<Option<Vec<u8>>, RunError> { Ok(if drawn { Some(png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?) } else { None }) },
+        || -> Result<Vec<u8>, RunError> { Ok(png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?) },
     );
     let name = job.output.file_name().map_or_else(|| format!("{stem}.{}", job.format.extension()), |n| n.to_string_lossy().into_owned());
     let mut files: Vec<(String, Vec<u8>)> = vec![(name, main?)];
     if let Some(vtu) = vtu? {
         files.push((format!("{stem}.vtu"), vtu.into_bytes()));
     }
-    if let Some(png) = png? {
-        files.push((format!("{stem}.png"), png));
-    }
+    files.push((format!("{stem}.png"), png?));
     let mut report = CurveReport {
         input: job.input.display().to_string(),
         dimension: D,

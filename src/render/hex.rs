@@ -39,7 +39,6 @@ use tiny_skia::Pixmap;
 use rayon::prelude::*;
 
 use super::{bounding_box, pieces, validate, ColourMap, Frame, RenderError, Style};
-use crate::mesh::element::Shape;
 use crate::mesh::CurvedMesh;
 use crate::numeric::{add, dot, scale, sub};
 use raster::{distance_to_segment, edge_blend, Canvas, EdgeStyle};
@@ -154,7 +153,8 @@ impl Default for RenderOptions3 {
 }
 
 /// Draws the boundary surface of the 3D mesh `mesh` of hexahedra (tensor
-/// order), tetrahedra or prisms (their lattice orders), of any order (a
+/// order), tetrahedra, prisms or pyramids (their lattice orders), alone or
+/// mixed, each cell by its own kind, of any order (a
 /// linear [`HexMesh`] is `CurvedMesh::from_hexes`), of the cells kept by
 /// the clip plane if any, as shaded faces coloured by `cell_values` of
 /// their cell, with each face's border drawn along its edges (if
@@ -164,9 +164,8 @@ impl Default for RenderOptions3 {
 /// `boundary` is not used. Without `opts.bounds` the picture frames the
 /// sampled surface.
 ///
-/// Fails, never panics, on the inputs listed in [`crate::render`], and on
-/// cells of another shape (pyramids) with
-/// [`RenderError::InvalidCurvedMesh`].
+/// Fails, never panics, on the inputs listed in [`crate::render`] (a cell
+/// whose node count is no solid kind's is [`RenderError::InvalidCurvedMesh`]).
 ///
 /// [`HexMesh`]: crate::mesh::HexMesh
 pub fn render_hexes(
@@ -198,10 +197,6 @@ impl HexPlan {
         opts: &RenderOptions3,
     ) -> Result<HexPlan, RenderError> {
         validate(mesh, values)?;
-        if !matches!(mesh.shape, Shape::Hexahedron | Shape::Tetrahedron | Shape::Prism) {
-            let reason = format!("cells of shape {:?} are not drawn in 3D", mesh.shape);
-            return Err(RenderError::InvalidCurvedMesh { reason });
-        }
         if let Some(clip) = &opts.clip {
             validate_clip(clip)?;
         }
@@ -295,10 +290,11 @@ fn kept_cells(mesh: &CurvedMesh<3>, corners: &Corners, clip: Option<&ClipPlane>)
     let Some(clip) = clip else {
         return vec![true; mesh.cells.len()];
     };
-    // 1/8 and 1/4 are exact, so a hex's mean is the plain sum of eighths.
-    let w = 1.0 / corners.per_cell as f64;
     (0..mesh.cells.len())
         .map(|c| {
+            // 1/8 and 1/4 are exact, so a hex's mean is the plain sum of
+            // eighths
+            let w = 1.0 / corners.cell(c).len() as f64;
             let centre = corners
                 .cell(c)
                 .iter()

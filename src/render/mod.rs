@@ -318,12 +318,13 @@ fn validate<const D: usize>(mesh: &CurvedMesh<D>, values: &[f64]) -> Result<(), 
     if mesh.shape.dim() != D {
         return Err(RenderError::InvalidCurvedMesh { reason: format!("cells of shape {:?} in a {D}D mesh", mesh.shape) });
     }
-    // the 2D plan draws quads and triangles side by side (a mixed mesh),
-    // the 3D plan one kind
-    let per_cell = match D {
-        2 => vec![Shape::Quadrilateral.num_nodes(mesh.p), Shape::Triangle.num_nodes(mesh.p)],
-        _ => vec![mesh.nodes_per_cell()],
-    };
+    if let Some(first) = mesh.cells.first().filter(|c| Shape::with_nodes(D, mesh.p, c.len()) != Some(mesh.shape)) {
+        let reason = format!("the mesh's cells are labelled {:?}, its first cell has {} nodes", mesh.shape, first.len());
+        return Err(RenderError::InvalidCurvedMesh { reason });
+    }
+    // each plan draws every kind of its dimension, side by side in a
+    // mixed mesh
+    let per_cell: Vec<usize> = Shape::ALL.iter().filter(|s| s.dim() == D).map(|s| s.num_nodes(mesh.p)).collect();
     check_elements(
         mesh.cells.iter().map(Vec::as_slice),
         &per_cell,

@@ -1,14 +1,14 @@
 //! The surface to draw: faces of kept cells that no other kept cell shares,
 //! each sampled on a grid of points with their normals.
 //!
-//! A hex face is sampled through the hex map on a quad grid; a tet or prism
-//! face through its own Lagrange element (its nodes, and the triangle's or
+//! A hex face is sampled through the hex map on a quad grid; a tet, prism
+//! or pyramid face through its own Lagrange element (its nodes, and the triangle's or
 //! the quadrilateral's basis on the mesh's spacing) on a triangle or quad
 //! grid; everything after sampling (lighting, rasterising, edge lines) sees
 //! only each face's [`Grid`] and the points, whatever the cell.
 
 use crate::mesh::element::order::HEX_CORNERS;
-use crate::mesh::element::prism;
+use crate::mesh::element::{prism, pyramid};
 use crate::mesh::element::simplex::{self, lattice, lattice_index};
 use crate::mesh::element::{Shape, Spacing};
 use crate::mesh::CurvedMesh;
@@ -131,49 +131,61 @@ impl Grid {
     }
 }
 
-/// The corner nodes of every cell: `per_cell` a cell (8 of a hex, 4 of a
-/// tet, 6 of a prism), in the numbering of the shape's vertices (which the
-/// face tables use).
+/// The corner nodes of every cell, each cell by its own kind (8 of a hex,
+/// 4 of a tet, 6 of a prism, 5 of a pyramid), in the numbering of the
+/// shape's vertices (which the face tables use).
 pub(crate) struct Corners {
-    pub per_cell: usize,
+    /// Each cell's kind.
+    pub shapes: Vec<Shape>,
+    /// Where each cell's corners start in `nodes`, and the end.
+    starts: Vec<usize>,
     pub nodes: Vec<usize>,
 }
 
 impl Corners {
-    /// The corners of the cells of `mesh`, a validated hex (tensor order),
-    /// tet or prism (lattice orders) mesh.
+    /// Cells all of `shape`, their corners in turn in `nodes`.
+    #[cfg(test)]
+    pub fn uniform(shape: Shape, nodes: Vec<usize>) -> Corners {
+        let n = shape.vertices().len();
+        let cells = nodes.len() / n;
+        Corners { shapes: vec![shape; cells], starts: (0..=cells).map(|c| c * n).collect(), nodes }
+    }
+
+    /// The corners of the cells of `mesh`, validated: hexes (tensor
+    /// order), tets, prisms and pyramids (lattice orders), mixed or not.
     pub fn of(mesh: &CurvedMesh<3>) -> Corners {
         let p = mesh.p;
-        let local: Vec<usize> = match mesh.shape {
-            Shape::Tetrahedron => simplex::vertex_nodes(mesh.shape, p),
-            Shape::Prism => prism::vertex_nodes(p).to_vec(),
-            _ => {
-                let q = p + 1;
-                HEX_CORNERS
-                    .iter()
-                    .map(|&[a, b, c]| p * (a + q * b + q * q * c))
-                    .collect()
+        let local = |shape: Shape| -> Vec<usize> {
+            match shape {
+                Shape::Tetrahedron => simplex::vertex_nodes(shape, p),
+                Shape::Prism => prism::vertex_nodes(p).to_vec(),
+                Shape::Pyramid => pyramid::vertex_nodes(p).to_vec(),
+                _ => {
+                    let q = p + 1;
+                    HEX_CORNERS.iter().map(|&[a, b, c]| p * (a + q * b + q * q * c)).collect()
+                }
             }
         };
-        let nodes = mesh
-            .cells
-            .iter()
-            .flat_map(|cell| local.iter().map(|&i| cell[i]))
-            .collect();
-        Corners {
-            per_cell: local.len(),
-            nodes,
+        let kinds: Vec<(Shape, Vec<usize>)> = mesh.shapes().into_iter().map(|s| (s, local(s))).collect();
+        let (mut shapes, mut starts, mut nodes) = (Vec::with_capacity(mesh.cells.len()), vec![0], Vec::new());
+        for (c, cell) in mesh.cells.iter().enumerate() {
+            let shape = mesh.cell_shape(c);
+            let (_, at) = kinds.iter().find(|k| k.0 == shape).expect("shapes() holds every cell's kind");
+            nodes.extend(at.iter().map(|&i| cell[i]));
+            shapes.push(shape);
+            starts.push(nodes.len());
         }
+        Corners { shapes, starts, nodes }
     }
 
     /// The corners of cell `c`.
     pub fn cell(&self, c: usize) -> &[usize] {
-        &self.nodes[c * self.per_cell..(c + 1) * self.per_cell]
+        &self.nodes[self.starts[c]..self.starts[c + 1]]
     }
 
-    /// The corners of each cell in turn.
-    fn cells(&self) -> impl Iterator<Item = &[usize]> {
-        self.nodes.chunks_exact(self.per_cell)
+    /// The kind and corners of each cell in turn.
+    fn cells(&self) -> impl Iterator<Item = (Shape, &[usize])> {
+        (0..self.shapes.len()).map(|c| (self.shapes[c], self.cell(c)))
     }
 }
 
@@ -199,23 +211,22 @@ pub(crate) struct SurfaceFace {
     pub face: usize,
 }
 
-/// The faces (`loops`, in local corner numbers) of kept cells (`kept[c]`)
-/// not shared with another kept cell: the original boundary of the kept
-/// cells plus the faces exposed where a neighbour was dropped. Faces come
-/// in cell order, so the picture does not depend on the sorting.
-pub(crate) fn surface_faces(
-    corners: &Corners,
-    loops: &[&[usize]],
-    kept: &[bool],
-) -> Vec<SurfaceFace> {
+/// The faces (loops of [`face_loops`] of each cell's kind, in local corner
+/// numbers) of kept cells (`kept[c]`) not shared with another kept cell:
+/// the original boundary of the kept cells plus the faces exposed where a
+/// neighbour was dropped. Faces come in cell order, so the picture does
+/// not depend on the sorting.
+pub(crate) fn surface_faces(corners: &Corners, kept: &[bool]) -> Vec<SurfaceFace> {
+    let loops: Vec<(Shape, Vec<&'static [usize]>)> = Shape::ALL.iter().filter(|s| s.dim() == 3).map(|&s| (s, face_loops(s))).collect();
+    let loops_of = |shape: Shape| &loops.iter().find(|l| l.0 == shape).expect("a solid kind").1;
     // Every face of a kept cell, keyed by its sorted nodes, then sorted so
     // that the copies of a face are neighbours.
     let mut all: Vec<([usize; 4], usize, usize)> = corners
         .cells()
         .enumerate()
         .filter(|&(c, _)| kept[c])
-        .flat_map(|(c, cell)| {
-            loops
+        .flat_map(|(c, (shape, cell))| {
+            loops_of(shape)
                 .iter()
                 .enumerate()
                 .map(move |(f, l)| (key(l.iter().map(|&i| cell[i])), c, f))
@@ -257,24 +268,26 @@ pub(crate) struct Patch {
     pub normals: Vec<[f64; 3]>,
 }
 
-/// The sampled boundary faces of the kept cells of `mesh` (validated, hex,
-/// tet or prism), in cell order, `m` pieces a side.
+/// The sampled boundary faces of the kept cells of `mesh` (validated:
+/// hexes, tets, prisms and pyramids, mixed or not), in cell order, `m`
+/// pieces a side.
 pub(crate) fn surface_patches(
     mesh: &CurvedMesh<3>,
     corners: &Corners,
     kept: &[bool],
     m: usize,
 ) -> Vec<Patch> {
-    let sampler = Sampler::new(mesh, m);
-    let loops = face_loops(mesh.shape);
-    surface_faces(corners, &loops, kept)
+    let samplers: Vec<(Shape, Sampler)> = mesh.shapes().into_iter().map(|s| (s, Sampler::new(mesh, s, m))).collect();
+    surface_faces(corners, kept)
         .into_iter()
         .map(|face| {
+            let shape = corners.shapes[face.cell];
+            let sampler = &samplers.iter().find(|k| k.0 == shape).expect("a sampler for every kind").1;
             let (points, normals) = sampler.sample(&mesh.cells[face.cell], &mesh.nodes, face.face);
             Patch {
                 cell: face.cell,
                 // a hex's faces, numbered by HEX_FACES, are all quads
-                grid: Grid::of(mesh.shape.faces()[face.face].0, m),
+                grid: Grid::of(shape.faces()[face.face].0, m),
                 points,
                 normals,
             }
@@ -286,7 +299,7 @@ pub(crate) fn surface_patches(
 enum Sampler {
     /// Hex faces through the tensor map: the 1-D basis at `t = k / m`.
     Hex { p: usize, table: Vec<Vec<f64>> },
-    /// Tet and prism faces through their own elements: each face's shape
+    /// Tet, prism and pyramid faces through their own elements: each face's shape
     /// and nodes (local numbers: a triangle's in lattice order, a quad's in
     /// tensor order, as `face_nodes` of [`simplex`] and [`prism`] give
     /// them), the triangle's basis on the triangle grid and the 1-D basis
@@ -343,9 +356,10 @@ impl TriangleTable {
 }
 
 impl Sampler {
-    fn new(mesh: &CurvedMesh<3>, m: usize) -> Sampler {
+    /// For the cells of `shape` of `mesh`.
+    fn new(mesh: &CurvedMesh<3>, shape: Shape, m: usize) -> Sampler {
         let (p, table) = (mesh.p, basis_table(mesh.p, mesh.spacing, m));
-        let faces = match mesh.shape {
+        let faces = match shape {
             Shape::Tetrahedron => (0..4)
                 .map(|f| {
                     (
@@ -356,6 +370,9 @@ impl Sampler {
                 .collect(),
             Shape::Prism => (0..5)
                 .map(|f| (Shape::Prism.faces()[f].0, prism::face_nodes(p, f)))
+                .collect(),
+            Shape::Pyramid => (0..5)
+                .map(|f| (Shape::Pyramid.faces()[f].0, pyramid::face_nodes(p, f)))
                 .collect(),
             _ => return Sampler::Hex { p, table },
         };
@@ -511,10 +528,7 @@ mod tests {
     }
 
     fn hex_corners(m: &HexMesh) -> Corners {
-        Corners {
-            per_cell: 8,
-            nodes: m.cells.concat(),
-        }
+        Corners::uniform(Shape::Hexahedron, m.cells.concat())
     }
 
     /// The nodes of `face` of its cell, in the face's loop order.
@@ -527,7 +541,7 @@ mod tests {
 
     fn hex_faces(m: &HexMesh, kept: &[bool]) -> Vec<Vec<usize>> {
         let (corners, loops) = (hex_corners(m), face_loops(Shape::Hexahedron));
-        surface_faces(&corners, &loops, kept)
+        surface_faces(&corners, kept)
             .into_iter()
             .map(|f| nodes_of(&corners, &loops, f))
             .collect()
@@ -568,7 +582,7 @@ mod tests {
         assert_eq!(hex_faces(&m, &[true, true]).len(), 10);
         let corners = hex_corners(&m);
         let loops = face_loops(Shape::Hexahedron);
-        let faces = surface_faces(&corners, &loops, &[true, false]);
+        let faces = surface_faces(&corners, &[true, false]);
         assert_eq!(faces.len(), 6, "cell 0 alone shows all six faces");
         assert!(faces.iter().all(|f| f.cell == 0));
         let inner = faces
@@ -580,7 +594,7 @@ mod tests {
             })
             .count();
         assert_eq!(inner, 1, "the face at x = 1 is exposed");
-        assert!(surface_faces(&corners, &loops, &[false, false]).is_empty());
+        assert!(surface_faces(&corners, &[false, false]).is_empty());
     }
 
     /// The unit cube split into six tets around its diagonal (0,0,0)–(1,1,1),
@@ -605,10 +619,7 @@ mod tests {
             .collect();
         (
             nodes,
-            Corners {
-                per_cell: 4,
-                nodes: tets,
-            },
+            Corners::uniform(Shape::Tetrahedron, tets),
         )
     }
 
@@ -631,7 +642,7 @@ mod tests {
             let det = dot(sub(t[1], t[0]), cross(sub(t[2], t[0]), sub(t[3], t[0])));
             assert!(det > 0.0, "tet {c} is inverted");
         }
-        let faces = surface_faces(&corners, &loops, &[true; 6]);
+        let faces = surface_faces(&corners, &[true; 6]);
         assert_eq!(faces.len(), 12, "two triangles per side of the cube");
         for f in faces {
             let ids = nodes_of(&corners, &loops, f);
@@ -645,7 +656,7 @@ mod tests {
         // its four.
         let mut kept = [false; 6];
         kept[2] = true;
-        assert_eq!(surface_faces(&corners, &loops, &kept).len(), 4);
+        assert_eq!(surface_faces(&corners, &kept).len(), 4);
     }
 
     #[test]

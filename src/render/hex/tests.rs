@@ -9,6 +9,7 @@ use image::RgbaImage;
 
 use super::view::{self, shade_colour};
 use super::*;
+use crate::mesh::element::Shape;
 use crate::mesh::element::prism::tests::prism_box;
 use crate::mesh::element::{simplex, Spacing};
 use crate::mesh::HexMesh;
@@ -1175,8 +1176,8 @@ fn bad_tet_meshes_are_errors_not_panics() {
         render_hexes(&short, &values, &ok),
         Err(RenderError::InvalidCurvedMesh { .. })
     ));
-    // Tets labelled as hexes, hexes as tets, and pyramids, which are not
-    // drawn.
+    // Tets labelled as hexes, hexes as tets: the label is the first
+    // cell's kind.
     let as_hexes = CurvedMesh {
         shape: Shape::Hexahedron,
         ..mesh.clone()
@@ -1199,10 +1200,8 @@ fn bad_tet_meshes_are_errors_not_panics() {
         cells: vec![(0..Shape::Pyramid.num_nodes(p)).collect()],
         ..tet_box(p, Spacing::Equispaced, [1, 1, 1], |x| x)
     };
-    assert!(matches!(
-        render_hexes(&pyramid, &[1.0], &ok),
-        Err(RenderError::InvalidCurvedMesh { .. })
-    ));
+    // pyramids are drawn
+    render_hexes(&pyramid, &[1.0], &ok).unwrap();
     // A collapsed tet mesh still renders.
     let mut collapsed = mesh.clone();
     collapsed
@@ -1454,5 +1453,57 @@ fn prisms_of_every_order_and_spacing_are_drawn() {
             let area = drawn_area(&img, &plan);
             assert!(area > 10_000, "p = {p} {spacing:?}: {area} pixels drawn");
         }
+    }
+}
+
+/// Two hexes, a pyramid on the first one's top and a tetrahedron on each
+/// of its triangles (the mixed solid of `refine`'s conformity test), at
+/// order `p`: the linear mesh, or the subdivision's elements.
+fn hex_pyramid_tets(p: usize) -> CurvedMesh<3> {
+    use crate::mesh::{MixedSolidMesh, SolidCell};
+    let nodes = vec![
+        [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
+        [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [2.0, 0.0, 1.0], [2.0, 1.0, 1.0], [0.5, 0.5, 1.6],
+        [0.5, -0.4, 1.3], [1.4, 0.5, 1.3], [0.5, 1.4, 1.3], [-0.4, 0.5, 1.3],
+    ];
+    let mut cells = vec![SolidCell::Hex([0, 1, 2, 3, 4, 5, 6, 7]), SolidCell::Hex([1, 8, 9, 2, 5, 10, 11, 6]), SolidCell::Pyramid([4, 5, 6, 7, 12])];
+    cells.extend([(4, 5, 13), (5, 6, 14), (6, 7, 15), (7, 4, 16)].map(|(a, b, out)| SolidCell::Tet([a, b, 12, out])));
+    let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
+    for f in cells.iter().flat_map(SolidCell::faces) {
+        let mut k = f.clone();
+        k.sort_unstable();
+        count.entry(k).or_insert((0, f)).0 += 1;
+    }
+    let faces = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
+    let coarse = MixedSolidMesh { nodes, cells, faces, part_names: vec!["all".into()] };
+    if p == 1 {
+        return CurvedMesh::from_mixed_solid(&coarse);
+    }
+    let (s, _) = crate::refine::subdivide_mixed_solid(&coarse, p, Spacing::Equispaced).unwrap();
+    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: s.elements.clone(), boundary: vec![], part_names: vec![] }
+}
+
+/// A mesh of hexes, a pyramid and tets is drawn cell by cell: its surface
+/// is the 21 outer faces (the faces between kinds found inner), and with
+/// the tets clipped away the pyramid shows its four triangles, sampled on
+/// triangle grids, while its base stays hidden on the hex.
+#[test]
+fn hexes_pyramids_and_tets_are_drawn_together() {
+    for p in [1, 2] {
+        let mesh = hex_pyramid_tets(p);
+        assert_eq!(mesh.shapes(), vec![Shape::Tetrahedron, Shape::Hexahedron, Shape::Pyramid]);
+        let values: Vec<f64> = (0..mesh.cells.len()).map(|c| c as f64).collect();
+        let plan = plan_of(&mesh, &values, &opts(Camera::default()));
+        // the hexes' 9 outer faces (of 12: one shared, one under the
+        // pyramid), none of the pyramid's, the tets' 3 each
+        assert_eq!(plan.patches.len(), 9 + 4 * 3, "p = {p}");
+        let kinds = |plan: &HexPlan, c: usize| plan.patches.iter().filter(|f| f.cell == c).count();
+        assert_eq!((kinds(&plan, 0), kinds(&plan, 1), kinds(&plan, 2), kinds(&plan, 3)), (4, 5, 0, 3), "p = {p}");
+        let clipped = RenderOptions3 { clip: Some(ClipPlane { point: [0.0, 0.0, 1.15], normal: [0.0, 0.0, 1.0] }), ..opts(Camera::default()) };
+        let plan = plan_of(&mesh, &values, &clipped);
+        let pyramid: Vec<&Patch> = plan.patches.iter().filter(|f| f.cell == 2).collect();
+        assert_eq!(pyramid.len(), 4, "p = {p}: the pyramid's triangles");
+        assert!(pyramid.iter().all(|f| f.grid.piece_corners() == 3));
+        decoded(&render_hexes(&mesh, &values, &clipped).unwrap());
     }
 }
