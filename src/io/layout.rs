@@ -589,7 +589,8 @@ fn sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> 
 /// order from its first corner towards its second (the element modules'
 /// `edge_nodes` and `face_nodes`).
 fn prism_sub_elements(shape: Shape, p: usize, dim: usize) -> Vec<(Shape, Vec<usize>)> {
-    let (edge, face): (fn(usize, usize) -> Vec<usize>, fn(usize, usize) -> Vec<usize>) = match shape {
+    type NodesOf = fn(usize, usize) -> Vec<usize>;
+    let (edge, face): (NodesOf, NodesOf) = match shape {
         Shape::Pyramid => (pyramid::edge_nodes, pyramid::face_nodes),
         _ => (prism::edge_nodes, prism::face_nodes),
     };

@@ -375,7 +375,7 @@ mod tests {
                         .map(|q| {
                             let mut x = [0.1, 0.15, 0.05];
                             x[v] += q as f64 * h;
-                            let sign = if (order - q) % 2 == 0 { 1.0 } else { -1.0 };
+                            let sign = if (order - q).is_multiple_of(2) { 1.0 } else { -1.0 };
                             sign * binom(order, q) as f64 * f(x)
                         })
                         .sum::<f64>()
