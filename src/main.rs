@@ -52,7 +52,7 @@ enum Command {
     /// it) if every element is certified valid.
     #[command(group(clap::ArgGroup::new("binding").required(true).multiple(true).args(["cad", "geometry"])))]
     Curve {
-        /// The linear triangle, quad, tetrahedral or hex mesh (Gmsh MSH 4.1, ASCII or binary, or MSH 2.2).
+        /// The linear mesh: triangles, quads, or both; tetrahedra, hexes, prisms, pyramids, alone or mixed (Gmsh MSH 4.1, ASCII or binary, or MSH 2.2).
         mesh: PathBuf,
         /// The CAD model the mesh was made from (.step/.stp, .iges/.igs,
         /// .brep, .xao, .geo): every boundary entity is curved onto the
