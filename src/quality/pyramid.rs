@@ -85,7 +85,11 @@ fn pow_lin(c0: i128, c1: i128, r: usize) -> Vec<i128> {
     (0..r).fold(vec![1], |acc, _| poly_mul(&acc, &[c0, c1]))
 }
 
+/// `C(n, k)`, 0 for `k > n`.
 fn binom(n: usize, k: usize) -> i128 {
+    if k > n {
+        return 0;
+    }
     (0..k).fold(1i128, |acc, i| acc * (n - i) as i128 / (i + 1) as i128)
 }
 
