@@ -191,10 +191,7 @@ fn run(cli: Cli) -> Result<()> {
             let parsed = Case::read(&case)?;
             let base = case.parent().unwrap_or(Path::new("."));
             let setup = parsed.setup_any(&case.display().to_string(), base)?;
-            let name = match &setup {
-                AnySetup::Quad(s) => s.name.clone(),
-                AnySetup::Hex(s) => s.name.clone(),
-            };
+            let name = setup.name().to_string();
             let out = out.unwrap_or_else(|| Path::new("out").join(folder_name(&name)));
             check_run_folder(&out, REPORT)?;
             run_and_print(setup, &out, &case.display().to_string())

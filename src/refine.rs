@@ -29,7 +29,8 @@
 use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::lsfem::Constraint;
 use crate::mesh::element::{nodes_1d, prism, pyramid, simplex, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
+use crate::mesh::mixed::{hex_tets, prism_tets, pyramid_tets};
+use crate::mesh::{cut_quad, BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
@@ -495,7 +496,7 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
     // the tetrahedra's faces on a quad facet: its sub-quads cut as the
     // sub-prisms beside them are
     let fine_facets = b.fine_facets.drain(..).flat_map(|(f, part)| match f.len() {
-        4 => split_face([f[0], f[1], f[2], f[3]]).into_iter().map(|t| (t.to_vec(), part)).collect::<Vec<_>>(),
+        4 => cut_quad([f[0], f[1], f[2], f[3]]).into_iter().map(|t| (t.to_vec(), part)).collect::<Vec<_>>(),
         _ => vec![(f, part)],
     });
     let fine = TetMesh::assemble(nodes, sub_cells, fine_facets.collect(), coarse.part_names.clone());
@@ -562,24 +563,6 @@ fn pyramid_key(c: usize, cell: &[usize; 5], [i, j, k]: [usize; 3], p: usize) -> 
     face.and_then(|(corners, bary)| sub_simplex_key(&corners, &bary, p, true)).unwrap_or(Key::Cell(c, [i, j, k]))
 }
 
-/// The two tetrahedra of a (sub-)pyramid with corners `v` (base, then
-/// apex; positively oriented), its base cut along the diagonal through
-/// its smallest node number ([`prism_tets`]'s rule), each oriented like
-/// the pyramid.
-pub fn pyramid_tets(v: [usize; 5]) -> [[usize; 4]; 2] {
-    let [a, b] = split_face([v[0], v[1], v[2], v[3]]);
-    [[a[0], a[1], a[2], v[4]], [b[0], b[1], b[2], v[4]]]
-}
-
-/// The twelve tetrahedra of a sub-hex with corners `h` (Gmsh's order,
-/// positively oriented) and a node `centre` inside: a pyramid on each
-/// face with its apex at the centre, cut by [`pyramid_tets`].
-fn hex_tets(h: [usize; 8], centre: usize) -> impl Iterator<Item = [usize; 4]> {
-    // the faces run counter-clockwise seen from outside: reversed, seen
-    // from the centre
-    Shape::Hexahedron.faces().iter().flat_map(move |(_, f)| pyramid_tets([h[f[0]], h[f[3]], h[f[2]], h[f[1]], centre]))
-}
-
 /// The point of the linear prism with `corners` at reference `ξ`: the
 /// triangle's barycentric weights times the two layers'.
 fn prism_point(corners: &[[f64; 3]; 6], xi: [f64; 3]) -> [f64; 3] {
@@ -604,35 +587,6 @@ fn prism_key(c: usize, cell: &[usize; 6], [i, j, k]: [usize; 3], p: usize) -> Ke
         [a, b] => face_key([cell[a], cell[b], cell[b + 3], cell[a + 3]], bary[b], k, p),
         _ => Key::Cell(c, [i, j, k]),
     }
-}
-
-/// The three tetrahedra of a (sub-)prism with corners `v` (Gmsh's order,
-/// positively oriented), each quad face cut along the diagonal through its
-/// smallest node number, so that neighbours cut a shared face alike
-/// (Dompierre, Labbé, Vallet & Camarero, "How to subdivide pyramids,
-/// prisms and hexaedra into tetrahedra", 1999). Every tetrahedron is
-/// oriented like the prism.
-pub fn prism_tets(v: [usize; 6]) -> [[usize; 4]; 3] {
-    // turn the prism (rotations of the triangle; top and bottom swapped
-    // with a mirror, which keeps the orientation) until its smallest
-    // node is vertex 0
-    const TURNS: [[usize; 6]; 6] = [[0, 1, 2, 3, 4, 5], [1, 2, 0, 4, 5, 3], [2, 0, 1, 5, 3, 4], [3, 5, 4, 0, 2, 1], [4, 3, 5, 1, 0, 2], [5, 4, 3, 2, 1, 0]];
-    let low = (0..6).min_by_key(|&a| v[a]).expect("six corners");
-    let r = TURNS[low].map(|a| v[a]);
-    if r[1].min(r[5]) < r[2].min(r[4]) {
-        [[r[0], r[1], r[2], r[5]], [r[0], r[1], r[5], r[4]], [r[0], r[4], r[5], r[3]]]
-    } else {
-        [[r[0], r[1], r[2], r[4]], [r[0], r[4], r[2], r[5]], [r[0], r[4], r[5], r[3]]]
-    }
-}
-
-/// The two triangles of a quad face `q` (cyclic), cut along the diagonal
-/// through its smallest node number ([`prism_tets`]'s rule), oriented
-/// like it.
-fn split_face(q: [usize; 4]) -> [[usize; 3]; 2] {
-    let low = (0..4).min_by_key(|&a| q[a]).expect("four corners");
-    let r: [usize; 4] = std::array::from_fn(|a| q[(low + a) % 4]);
-    [[r[0], r[1], r[2]], [r[0], r[2], r[3]]]
 }
 
 /// The two triangles of a convex Q1 sub-cell (corners counter-clockwise),

@@ -58,7 +58,7 @@ fn bench_setup(text: &str, name: &str, cells: Vec<usize>, solver: SolverChoice) 
 pub fn demo_deformation(n: usize, solver: SolverChoice) -> Result<Deformation, BenchError> {
     match bench_setup(DEMO_CASE, "<built-in demo>", vec![n, n], solver)? {
         AnySetup::Quad(s) => Ok(Deformation::new(s.mesh, s.parts, s.field, s.options)?),
-        AnySetup::Hex(_) => unreachable!("the demo is 2D"),
+        _ => unreachable!("the demo is of quadrilaterals"),
     }
 }
 
@@ -66,7 +66,7 @@ pub fn demo_deformation(n: usize, solver: SolverChoice) -> Result<Deformation, B
 pub fn ball_deformation(n: usize, solver: SolverChoice) -> Result<Deformation3, BenchError> {
     match bench_setup(QUARTER_BALL, "<quarter ball>", vec![n, n, n], solver)? {
         AnySetup::Hex(s) => Ok(Deformation3::new(s.mesh, s.parts, s.field, s.options)?),
-        AnySetup::Quad(_) => unreachable!("the quarter ball is 3D"),
+        _ => unreachable!("the quarter ball is of hexahedra"),
     }
 }
 

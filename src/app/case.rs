@@ -4,13 +4,14 @@
 //! Every table rejects unknown fields, and every error names the file and
 //! the field (toml's own errors add the line and column).
 
-use crate::deform::{BoundaryPart, Correspondence, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
+use crate::deform::{BoundaryPart, Correspondence, CutSolid, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
 use crate::expr::Expr;
 use crate::geometry::{shape_from_toml, spec_from_toml, LevelSet, ShapeSpec, SurfaceSpec};
 use crate::highorder::curve::CurveOptions;
 use crate::highorder::{check_order, Spacing};
 use crate::jacobian::{lift, ImageField, JacobianError, Interface, JacobianField, Locus, SmallWhere, Target, TimePath, EXPR_VARS};
-use crate::mesh::{HexMesh, QuadMesh, BOX_FACES, BOX_SIDES};
+use crate::mesh::element::Shape;
+use crate::mesh::{HexMesh, MixedSolidMesh, PlaneMesh, QuadMesh, SolidMesh, TetMesh, TriMesh, BOX_FACES, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -63,6 +64,42 @@ pub struct MeshSpec {
     pub upper: Vec<f64>,
     /// Cells along each axis.
     pub cells: Vec<usize>,
+    /// What each box cell is made of (quadrilaterals or hexahedra when
+    /// not given).
+    #[serde(default)]
+    pub elements: Option<ElementsSpec>,
+}
+
+/// The kinds of elements a case's box is made of.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ElementsSpec {
+    /// Quadrilaterals (2D).
+    Quadrilateral,
+    /// Two triangles per box cell (2D).
+    Triangle,
+    /// Hexahedra (3D).
+    Hexahedron,
+    /// Six tetrahedra per box cell, Kuhn's cut (3D).
+    Tetrahedron,
+    /// Two prisms per box cell, layered along z (3D).
+    Prism,
+    /// Six pyramids per box cell, their apex at its centre (3D).
+    Pyramid,
+}
+
+impl ElementsSpec {
+    /// The element kind.
+    pub fn shape(self) -> Shape {
+        match self {
+            ElementsSpec::Quadrilateral => Shape::Quadrilateral,
+            ElementsSpec::Triangle => Shape::Triangle,
+            ElementsSpec::Hexahedron => Shape::Hexahedron,
+            ElementsSpec::Tetrahedron => Shape::Tetrahedron,
+            ElementsSpec::Prism => Shape::Prism,
+            ElementsSpec::Pyramid => Shape::Pyramid,
+        }
+    }
 }
 
 /// Kinds of boundary parts.
@@ -427,12 +464,31 @@ pub struct Setup<M = QuadMesh, const D: usize = 2> {
     pub highorder: Option<CurveOptions>,
 }
 
-/// A 2D or a 3D setup.
+/// A 2D or a 3D setup, by the kind of its elements.
 pub enum AnySetup {
     /// Quadrilaterals.
     Quad(Setup<QuadMesh, 2>),
+    /// Triangles.
+    Tri(Setup<TriMesh, 2>),
     /// Hexahedra.
     Hex(Setup<HexMesh, 3>),
+    /// Tetrahedra.
+    Tet(Setup<TetMesh, 3>),
+    /// Prisms or pyramids, moved through their tetrahedra.
+    Cut(Setup<CutSolid, 3>),
+}
+
+impl AnySetup {
+    /// The case's name.
+    pub fn name(&self) -> &str {
+        match self {
+            AnySetup::Quad(s) => &s.name,
+            AnySetup::Tri(s) => &s.name,
+            AnySetup::Hex(s) => &s.name,
+            AnySetup::Tet(s) => &s.name,
+            AnySetup::Cut(s) => &s.name,
+        }
+    }
 }
 
 impl Case {
@@ -480,7 +536,7 @@ impl Case {
     pub fn setup(&self, file: &str, base_dir: &Path) -> Result<Setup, CaseError> {
         match self.setup_any(file, base_dir)? {
             AnySetup::Quad(s) => Ok(s),
-            AnySetup::Hex(_) => Err(CaseError { file: file.to_string(), message: "a 2D case was expected, this one is 3D".into() }),
+            _ => Err(CaseError { file: file.to_string(), message: "a 2D case of quadrilaterals was expected".into() }),
         }
     }
 
@@ -549,24 +605,53 @@ impl Case {
             tolerance: self.time.tolerance,
             ..Default::default()
         };
-        if dim == 2 {
-            let mut mesh = QuadMesh::structured_box([m.lower[0], m.lower[1]], [m.upper[0], m.upper[1]], m.cells[0], m.cells[1]);
-            let (parts, side_part) = self.parts(file, &BOX_SIDES)?;
-            // re-tag the box's side indices with part indices
-            mesh.edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
-            mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
-            let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
-            check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
-            Ok(AnySetup::Quad(Setup { name, mesh, parts, field, options, output, highorder }))
-        } else {
-            let mut mesh = HexMesh::structured_box([m.lower[0], m.lower[1], m.lower[2]], [m.upper[0], m.upper[1], m.upper[2]], [m.cells[0], m.cells[1], m.cells[2]]);
-            let (parts, face_part) = self.parts(file, &BOX_FACES)?;
-            mesh.faces.iter_mut().for_each(|f| f.part = face_part[f.part]);
-            mesh.part_names = parts.iter().map(|p| p.name.clone()).collect();
-            let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
-            check_positive(&field, mesh.nodes.iter().copied().chain(centres)).map_err(|e| err(format!("field `jacobian`: {e}")))?;
-            Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output, highorder }))
+        let kind = m.elements.unwrap_or(if dim == 2 { ElementsSpec::Quadrilateral } else { ElementsSpec::Hexahedron });
+        if kind.shape().dim() != dim {
+            let named = format!("{kind:?}").to_lowercase();
+            return Err(err(format!("field `mesh.elements`: `{named}` elements make a {}D mesh, but `mesh.lower` has {dim} numbers", kind.shape().dim())));
         }
+        let check = |points: &mut dyn Iterator<Item = [f64; 3]>| check_positive(&field, points).map_err(|e| err(format!("field `jacobian`: {e}")));
+        if dim == 2 {
+            let (lo, hi) = ([m.lower[0], m.lower[1]], [m.upper[0], m.upper[1]]);
+            let (parts, side_part) = self.parts(file, &BOX_SIDES)?;
+            let names: Vec<String> = parts.iter().map(|p| p.name.clone()).collect();
+            // re-tag the box's side indices with part indices
+            let retag = |edges: &mut Vec<crate::mesh::BoundaryEdge>| edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
+            if kind == ElementsSpec::Triangle {
+                let mut mesh = TriMesh::structured_box(lo, hi, m.cells[0], m.cells[1]);
+                retag(&mut mesh.edges);
+                mesh.part_names = names;
+                check(&mut plane_points(&mesh))?;
+                return Ok(AnySetup::Tri(Setup { name, mesh, parts, field, options, output, highorder }));
+            }
+            let mut mesh = QuadMesh::structured_box(lo, hi, m.cells[0], m.cells[1]);
+            retag(&mut mesh.edges);
+            mesh.part_names = names;
+            check(&mut plane_points(&mesh))?;
+            return Ok(AnySetup::Quad(Setup { name, mesh, parts, field, options, output, highorder }));
+        }
+        let (lo, hi, n) = ([m.lower[0], m.lower[1], m.lower[2]], [m.upper[0], m.upper[1], m.upper[2]], [m.cells[0], m.cells[1], m.cells[2]]);
+        let (parts, face_part) = self.parts(file, &BOX_FACES)?;
+        let names: Vec<String> = parts.iter().map(|p| p.name.clone()).collect();
+        if kind == ElementsSpec::Hexahedron {
+            let mut mesh = HexMesh::structured_box(lo, hi, n);
+            mesh.faces.iter_mut().for_each(|f| f.part = face_part[f.part]);
+            mesh.part_names = names;
+            check(&mut solid_points(&mesh))?;
+            return Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output, highorder }));
+        }
+        let mut solid = MixedSolidMesh::structured_box(lo, hi, n, kind.shape()).expect("a solid kind");
+        solid.faces.iter_mut().for_each(|f| f.1 = face_part[f.1]);
+        solid.part_names = names;
+        if let Some(mut mesh) = solid.to_tet_mesh() {
+            mesh.part_names = solid.part_names;
+            check(&mut solid_points(&mesh))?;
+            return Ok(AnySetup::Tet(Setup { name, mesh, parts, field, options, output, highorder }));
+        }
+        let mesh = CutSolid::new(solid);
+        let (tets, _) = mesh.solid().tetrahedra();
+        check(&mut solid_points(&tets))?;
+        Ok(AnySetup::Cut(Setup { name, mesh, parts, field, options, output, highorder }))
     }
 
     /// Boundary parts, and for each box side (face) the index of its part.
@@ -637,6 +722,18 @@ fn check_positive<const D: usize>(field: &JacobianField, points: impl Iterator<I
         }
     }
     Ok(())
+}
+
+/// The nodes and cell centres of a plane mesh, lifted to 3D.
+fn plane_points<const N: usize>(mesh: &PlaneMesh<N>) -> impl Iterator<Item = [f64; 3]> + '_ {
+    let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
+    mesh.nodes.iter().copied().chain(centres).map(lift)
+}
+
+/// The nodes and cell centres of a solid mesh.
+fn solid_points<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>) -> impl Iterator<Item = [f64; 3]> + '_ {
+    let centres = (0..mesh.num_cells()).map(|c| centroid(&mesh.cell_coords(c)));
+    mesh.nodes.iter().copied().chain(centres)
 }
 
 fn centroid<const D: usize, const N: usize>(p: &[[f64; D]; N]) -> [f64; D] {

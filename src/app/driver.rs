@@ -7,8 +7,8 @@
 
 use crate::app::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
 use crate::refine::Subdividable;
-use crate::deform::{BoundaryPart, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
-use crate::highorder::curve::{curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
+use crate::deform::{BoundaryPart, CutSolid, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
+use crate::highorder::curve::{certify_mesh, curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
 use crate::highorder::Spacing;
 use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
@@ -261,7 +261,7 @@ pub trait Curvable<const D: usize> {
 }
 
 /// What a kind of mesh writes and draws: the per-dimension end of a run.
-pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D, N> + Curvable<D> {
+pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Curvable<D> {
     /// What the figures mean.
     const DEFINITIONS: Definitions;
     /// Validity and shape figures.
@@ -271,12 +271,24 @@ pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Subdividable<D
     /// Per-cell size at positions `nodes`.
     fn cell_sizes(&self, nodes: &[[f64; D]]) -> Vec<f64>;
     /// The MSH 4.1 text.
-    fn msh(&self) -> String;
+    fn msh(&self) -> Result<String, MshError>;
     /// The VTU text with cell data.
     fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError>;
     /// A picture of the mesh at positions `nodes`, cells coloured by
-    /// `values`.
+    /// `values` (one per written cell).
     fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
+    /// Per written cell, from per-cell ratios of the current size to an
+    /// additive measure (J/f, a size ratio) on Algorithm 1's cells at
+    /// positions `nodes`: the same cells, but for solids cut into
+    /// tetrahedra ([`CutSolid`]).
+    fn written_ratios(&self, _nodes: &[[f64; D]], values: &[f64]) -> Vec<f64> {
+        values.to_vec()
+    }
+    /// Per written cell, from additive per-cell values (sizes) on
+    /// Algorithm 1's cells.
+    fn written_sums(&self, values: &[f64]) -> Vec<f64> {
+        values.to_vec()
+    }
 }
 
 /// What every picture of one run shares, and its title and width.
@@ -322,8 +334,8 @@ impl<const N: usize> Outputs<2, N> for PlaneMesh<N> {
     fn cell_sizes(&self, nodes: &[Point2]) -> Vec<f64> {
         self.cells.iter().map(|c| polygon_area(&c.map(|n| nodes[n]))).collect()
     }
-    fn msh(&self) -> String {
-        msh_string(self)
+    fn msh(&self) -> Result<String, MshError> {
+        Ok(msh_string(self))
     }
     fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
         vtu_string(self, cell_data, &[])
@@ -392,8 +404,8 @@ where
     fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
         self.cells.iter().map(|c| crate::quality::cell_size(&c.map(|n| nodes[n]))).collect()
     }
-    fn msh(&self) -> String {
-        hex_msh_string(self)
+    fn msh(&self) -> Result<String, MshError> {
+        Ok(hex_msh_string(self))
     }
     fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
         hex_vtu_string(self, cell_data, &[])
@@ -433,7 +445,10 @@ pub const REPORT: &str = "report.json";
 pub fn run_any(setup: AnySetup, out_dir: &Path, progress: impl FnMut(Progress)) -> Result<Report, RunError> {
     match setup {
         AnySetup::Quad(s) => run_setup(s, out_dir, progress),
+        AnySetup::Tri(s) => run_setup(s, out_dir, progress),
         AnySetup::Hex(s) => run_setup(s, out_dir, progress),
+        AnySetup::Tet(s) => run_setup(s, out_dir, progress),
+        AnySetup::Cut(s) => run_setup(s, out_dir, progress),
     }
 }
 
@@ -453,11 +468,13 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let every = (nominal_steps / 40).max(1);
     let start_sizes = mesh_start_sizes(&def);
     let colour = output.colour;
+    // per written cell
     let values = |d: &Deformation<M, D, N>| -> Result<Vec<f64>, DeformError> {
-        match colour {
-            Colour::Jf => d.jf_now(),
-            Colour::Size => Ok(d.mesh.cell_sizes(d.mesh.nodes()).iter().zip(&start_sizes).map(|(a, a0)| a / a0).collect()),
-        }
+        let per_cell = match colour {
+            Colour::Jf => d.jf_now()?,
+            Colour::Size => d.mesh.cell_sizes(d.mesh.nodes()).iter().zip(&start_sizes).map(|(a, a0)| a / a0).collect(),
+        };
+        Ok(d.mesh.written_ratios(d.mesh.nodes(), &per_cell))
     };
     let snapshot = |d: &Deformation<M, D, N>| (d.t, d.mesh.nodes().to_vec(), values(d));
     let mut stills = Vec::new();
@@ -496,16 +513,23 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     // with high order, mesh.* is the curved mesh and linear.* Algorithm 1's
     let linear = if curved.is_some() { "linear" } else { "mesh" };
-    files.push((format!("{linear}.msh"), def.mesh.msh().into_bytes()));
+    files.push((format!("{linear}.msh"), def.mesh.msh()?.into_bytes()));
     let scaled = def.mesh.scaled_jacobians();
-    let vtu = def.mesh.vtu(&[("J/f", &ratios), ("scaled_jacobian", &scaled), ("start_size", &start_sizes)])?;
+    let cell_ratios = def.mesh.written_ratios(def.mesh.nodes(), &ratios);
+    let vtu = def.mesh.vtu(&[("J/f", &cell_ratios), ("scaled_jacobian", &scaled), ("start_size", &def.mesh.written_sums(&start_sizes))])?;
     files.push((format!("{linear}.vtu"), vtu.into_bytes()));
     if let Some(c) = &curved {
         files.push(("mesh.msh".into(), c.mesh.msh_string()?.into_bytes()));
         let min_det: Vec<f64> = c.certificates.iter().map(|x| x.min_det_lower).collect();
         let sj: Vec<f64> = c.certificates.iter().map(|x| x.min_scaled_jacobian).collect();
-        let vtu = c.mesh.vtu_string(&[("J/f", &ratios), ("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])?;
-        files.push(("mesh.vtu".into(), vtu.into_bytes()));
+        // VTK has no cell for a curved pyramid: the report's `outputs`
+        // say what was written
+        if crate::io::vtu::vtk_can_hold(&c.mesh) {
+            let vtu = c.mesh.vtu_string(&[("J/f", &cell_ratios), ("min_det_j", &min_det), ("min_scaled_jacobian", &sj)])?;
+            files.push(("mesh.vtu".into(), vtu.into_bytes()));
+        } else {
+            tracing::info!("{}", crate::io::vtu::VtuError::NoPyramidCell(c.mesh.p));
+        }
     }
     let node_sets = [def.start.as_slice(), def.mesh.nodes()].into_iter().chain(stills.iter().chain(&anim).map(|s| s.1.as_slice()));
     let bounds = frame_bounds(node_sets);
@@ -545,8 +569,8 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     let mut report = Report {
         case: name,
         dimension: D,
-        cells: def.mesh.cells().len(),
-        nodes: def.mesh.nodes().len(),
+        cells: quality.cells,
+        nodes: quality.nodes,
         unknowns: def.num_unknowns(),
         integrator,
         nominal_steps,
@@ -817,7 +841,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
 /// `curve` on a solid mesh of hexes or tetrahedra.
 fn curve_solid<const N: usize, const K: usize>(mesh: SolidMesh<N, K>, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError>
 where
-    SolidMesh<N, K>: Outputs<3, N>,
+    SolidMesh<N, K>: Outputs<3, N> + Subdividable<3, N>,
 {
     let (gfile, names) = (binding.gfile, &mesh.part_names);
     if let Some(model) = binding.model {
@@ -850,6 +874,65 @@ fn curve_mixed_solid(mut mesh: MixedSolidMesh, binding: &Binding, job: (&CurveJo
         mesh.faces = kept;
     }
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
+}
+
+/// Solids of prisms, pyramids or mixed kinds: Algorithm 1 on their
+/// tetrahedra, everything written and drawn by their own cells.
+impl Outputs<3, 4> for CutSolid {
+    const DEFINITIONS: Definitions = Definitions {
+        det_j: "determinant of each cell's linear map from its reference element (Gmsh's vertices, mapped to [0,1]-based ones: tetrahedron, prism, pyramid, cube), bounded by its Bezier coefficients as the curved elements are (order 1)",
+        scaled_jacobian: "per cell, det J/(product of the column norms of J), its minimum on the order-1 certificate's sampling grid",
+        jf: "Algorithm 1 solves on the tetrahedra cut from the cells: the figures are per tetrahedron, |K_t| / integral over K_0 of f(phi(xi)) dxi (4-point rule); the pictures and VTU show each cell's, the volume of its tetrahedra over the sum of their integrals",
+    };
+    fn quality(&self) -> MeshQuality {
+        let solid = self.solid();
+        let (certs, _) = certify_mesh(&CurvedMesh::from_mixed_solid(&solid)).expect("order 1 of every solid kind");
+        let volumes = self.written_sums(&Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| self.nodes()[n]))).collect::<Vec<_>>());
+        MeshQuality {
+            cells: solid.cells.len(),
+            nodes: solid.nodes.len(),
+            det_j: Range { min: certs.iter().map(|c| c.min_det_lower).fold(f64::INFINITY, f64::min), max: certs.iter().map(|c| c.max_det).fold(f64::NEG_INFINITY, f64::max) },
+            scaled_jacobian: Range::of(certs.iter().map(|c| c.min_scaled_jacobian)),
+            invalid_cells: (0..certs.len()).filter(|&c| !certs[c].valid).collect(),
+            cell_size: Range::of(volumes.iter().copied()),
+        }
+    }
+    fn scaled_jacobians(&self) -> Vec<f64> {
+        let (certs, _) = certify_mesh(&CurvedMesh::from_mixed_solid(&self.solid())).expect("order 1 of every solid kind");
+        certs.iter().map(|c| c.min_scaled_jacobian).collect()
+    }
+    fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
+        Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| nodes[n]))).collect()
+    }
+    fn msh(&self) -> Result<String, MshError> {
+        CurvedMesh::from_mixed_solid(&self.solid()).msh_string()
+    }
+    fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
+        CurvedMesh::from_mixed_solid(&self.solid()).vtu_string(cell_data)
+    }
+    fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        let solid = MixedSolidMesh { nodes: nodes[..self.solid().nodes.len()].to_vec(), ..self.solid() };
+        Self::draw_curved(&CurvedMesh::from_mixed_solid(&solid), values, look)
+    }
+    fn written_ratios(&self, nodes: &[Point3], values: &[f64]) -> Vec<f64> {
+        // a cell's ratio is its tetrahedra's volume over the sum of what
+        // each one's ratio divides
+        let sizes = self.cell_sizes(nodes);
+        let under: Vec<f64> = sizes.iter().zip(values).map(|(s, r)| s / r).collect();
+        self.written_sums(&sizes).iter().zip(self.written_sums(&under)).map(|(s, u)| s / u).collect()
+    }
+    fn written_sums(&self, values: &[f64]) -> Vec<f64> {
+        self.summed(values)
+    }
+}
+
+impl Curvable<3> for CutSolid {
+    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
+        self.solid().curve(parts, opts, progress)
+    }
+    fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
+        MixedSolidMesh::draw_curved(mesh, values, look)
+    }
 }
 
 impl Curvable<3> for MixedSolidMesh {

@@ -21,6 +21,7 @@
 //! [`BoundaryModel`]: `chains` (2D) and `patches` (3D).
 
 mod chains;
+mod cut;
 mod patches;
 pub mod strain;
 
@@ -33,6 +34,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use chains::Chains;
+pub use cut::CutSolid;
 pub use patches::Patches;
 
 /// How a point of the starting boundary finds its place on the target.

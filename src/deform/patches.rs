@@ -1,5 +1,5 @@
-//! The 3D boundary model: the boundary faces of a hex mesh grouped into
-//! planar patches (one per box face and part), the feature edges where two
+//! The 3D boundary model: the boundary faces (quads or triangles) of a
+//! hex or tetrahedral mesh grouped into planar patches (one per box face and part), the feature edges where two
 //! patches meet, and the corners where three or more meet.
 //!
 //! - A node inside a patch is constrained like a 2D chain node: `u·n = 0`
@@ -19,7 +19,7 @@
 use super::{BoundaryModel, BoundaryPart, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::jacobian::facet_flux_points;
 use crate::lsfem::Constraint;
-use crate::mesh::{HexMesh, Point3, TetMesh};
+use crate::mesh::{HexMesh, Point3, SolidMesh, TetMesh};
 use crate::numeric::{cross3 as cross, dot, sub, unit};
 use crate::quality::cell_size;
 use std::collections::HashMap;
@@ -231,14 +231,14 @@ impl Patches {
 
     /// Every starting node and face centre of a moving part must have an
     /// image on its target.
-    fn check_reachable(&self, mesh: &HexMesh) -> Result<(), DeformError> {
+    fn check_reachable<const N: usize, const K: usize>(&self, mesh: &SolidMesh<N, K>) -> Result<(), DeformError> {
         for f in &mesh.faces {
             let part = &self.parts[f.part];
             if !matches!(part.kind, PartKind::Move { .. }) {
                 continue;
             }
             let pts = f.nodes.map(|n| mesh.nodes[n]);
-            let centre: Point3 = std::array::from_fn(|i| 0.25 * (pts[0][i] + pts[1][i] + pts[2][i] + pts[3][i]));
+            let centre: Point3 = std::array::from_fn(|i| pts.iter().map(|p| p[i]).sum::<f64>() / K as f64);
             for p in pts.into_iter().chain(std::iter::once(centre)) {
                 if part.image(p).is_none() {
                     return Err(DeformError::Unreachable {
@@ -410,9 +410,9 @@ impl Q1Mesh<3, 8> for HexMesh {
     }
 }
 
-/// A tetrahedral mesh as Algorithm 2 takes it: `curve` builds its
-/// boundary model on the refined mesh ([`crate::refine`]); Algorithm 1's
-/// patches of box faces are for hex meshes.
+/// A tetrahedral mesh: Algorithm 1's patches from its boundary triangles
+/// (`curve` builds Algorithm 2's boundary model on the refined mesh,
+/// [`crate::refine`]).
 impl Q1Mesh<3, 4> for TetMesh {
     type Boundary = Patches;
 
@@ -436,14 +436,16 @@ impl Q1Mesh<3, 4> for TetMesh {
         (0..self.num_cells()).map(|c| cell_size(&self.cell_coords(c))).sum()
     }
 
-    fn boundary(&self, _parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {
-        Err(DeformError::NoBoundaryModel("tetrahedral meshes"))
+    fn boundary(&self, parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {
+        let b = classify(self, parts)?;
+        b.check_reachable(self)?;
+        Ok(b)
     }
 }
 
 /// Groups faces into planar patches, finds edges and corners, and gives
 /// every node its role.
-fn classify(mesh: &HexMesh, parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {
+fn classify<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>, parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {
     let face_patch = group_faces(mesh);
     let mut patches: Vec<Patch> = Vec::new();
     let npatch = face_patch.iter().copied().max().map_or(0, |m| m + 1);
@@ -498,7 +500,7 @@ fn check_edge_meeting(e: &Edge, patches: &[Patch], parts: &[BoundaryPart<3>]) ->
 }
 
 /// The patches every node touches, sorted.
-fn node_patches(faces: &[crate::mesh::BoundaryFace], face_patch: &[usize], n: usize) -> Vec<Vec<usize>> {
+fn node_patches<const K: usize>(faces: &[crate::mesh::BoundaryFace<K>], face_patch: &[usize], n: usize) -> Vec<Vec<usize>> {
     let mut out: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (f, face) in faces.iter().enumerate() {
         for &v in &face.nodes {
@@ -513,7 +515,7 @@ fn node_patches(faces: &[crate::mesh::BoundaryFace], face_patch: &[usize], n: us
 
 /// The straight starting edge between two patches: its extent is that of
 /// all nodes touching both (the corners at its ends included).
-fn edge_between(mesh: &HexMesh, node_patches: &[Vec<usize>], key: [usize; 2], patches: &[Patch], parts: &[BoundaryPart<3>]) -> Edge {
+fn edge_between<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>, node_patches: &[Vec<usize>], key: [usize; 2], patches: &[Patch], parts: &[BoundaryPart<3>]) -> Edge {
     let dir = unit(cross(patches[key[0]].normal, patches[key[1]].normal));
     let on: Vec<Point3> = (0..mesh.num_nodes()).filter(|&i| key.iter().all(|k| node_patches[i].contains(k))).map(|i| mesh.nodes[i]).collect();
     let proj = |p: Point3| dot(p, dir);
@@ -525,15 +527,12 @@ fn edge_between(mesh: &HexMesh, node_patches: &[Vec<usize>], key: [usize; 2], pa
 
 /// Flood-fills faces of one part across edges where the boundary turns
 /// by less than 30°: each group is one patch.
-fn group_faces(mesh: &HexMesh) -> Vec<usize> {
-    let normal = |f: usize| {
-        let p = mesh.faces[f].nodes.map(|n| mesh.nodes[n]);
-        unit(cross(sub(p[2], p[0]), sub(p[3], p[1])))
-    };
+fn group_faces<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>) -> Vec<usize> {
+    let normal = |f: usize| face_normal(&mesh.faces[f].nodes.map(|n| mesh.nodes[n]));
     let mut by_edge: HashMap<[usize; 2], Vec<usize>> = HashMap::new();
     for (f, face) in mesh.faces.iter().enumerate() {
-        for k in 0..4 {
-            let (a, b) = (face.nodes[k], face.nodes[(k + 1) % 4]);
+        for k in 0..K {
+            let (a, b) = (face.nodes[k], face.nodes[(k + 1) % K]);
             by_edge.entry([a.min(b), a.max(b)]).or_default().push(f);
         }
     }
@@ -547,8 +546,8 @@ fn group_faces(mesh: &HexMesh) -> Vec<usize> {
         let mut stack = vec![seed];
         while let Some(f) = stack.pop() {
             let face = &mesh.faces[f];
-            for k in 0..4 {
-                let (a, b) = (face.nodes[k], face.nodes[(k + 1) % 4]);
+            for k in 0..K {
+                let (a, b) = (face.nodes[k], face.nodes[(k + 1) % K]);
                 for &g in &by_edge[&[a.min(b), a.max(b)]] {
                     if patch[g] == usize::MAX && mesh.faces[g].part == face.part && dot(normal(f), normal(g)) > 30f64.to_radians().cos() {
                         patch[g] = next;
@@ -563,9 +562,9 @@ fn group_faces(mesh: &HexMesh) -> Vec<usize> {
 }
 
 /// A patch's plane and parameter rectangle; its faces must be planar.
-fn planar_patch(mesh: &HexMesh, faces: &[usize], parts: &[BoundaryPart<3>]) -> Result<Patch, DeformError> {
+fn planar_patch<const N: usize, const K: usize>(mesh: &SolidMesh<N, K>, faces: &[usize], parts: &[BoundaryPart<3>]) -> Result<Patch, DeformError> {
     let first = mesh.faces[faces[0]].nodes.map(|n| mesh.nodes[n]);
-    let normal = unit(cross(sub(first[2], first[0]), sub(first[3], first[1])));
+    let normal = face_normal(&first);
     let origin = first[0];
     let e0 = unit(sub(first[1], first[0]));
     let e1 = cross(normal, e0);
@@ -588,4 +587,13 @@ fn planar_patch(mesh: &HexMesh, faces: &[usize], parts: &[BoundaryPart<3>]) -> R
         }
     }
     Ok(p)
+}
+
+/// The unit normal of a flat quad (across its diagonals) or triangle, by
+/// the right-hand rule of its node order.
+fn face_normal(p: &[Point3]) -> Point3 {
+    match p.len() {
+        3 => unit(cross(sub(p[1], p[0]), sub(p[2], p[0]))),
+        _ => unit(cross(sub(p[2], p[0]), sub(p[3], p[1]))),
+    }
 }

@@ -84,7 +84,27 @@ impl QuadMesh {
             part_names: BOX_SIDES.iter().map(|s| s.to_string()).collect(),
         }
     }
+}
 
+impl TriMesh {
+    /// [`QuadMesh::structured_box`] with every cell cut into two triangles
+    /// along its diagonal from the lower left corner (all cells alike).
+    pub fn structured_box(lo: Point2, hi: Point2, nx: usize, ny: usize) -> TriMesh {
+        let q = QuadMesh::structured_box(lo, hi, nx, ny);
+        let cells = q.cells.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
+        TriMesh { nodes: q.nodes, cells, edges: q.edges, part_names: q.part_names }
+    }
+}
+
+/// The two triangles of a quad `q` (cyclic), cut along the diagonal
+/// through its smallest node number, oriented like it: neighbours that
+/// share the quad cut it alike, whatever kinds they are (Dompierre,
+/// Labbé, Vallet & Camarero, "How to subdivide pyramids, prisms and
+/// hexaedra into tetrahedra", 1999).
+pub fn cut_quad(q: [usize; 4]) -> [[usize; 3]; 2] {
+    let low = (0..4).min_by_key(|&a| q[a]).expect("four corners");
+    let r: [usize; 4] = std::array::from_fn(|a| q[(low + a) % 4]);
+    [[r[0], r[1], r[2]], [r[0], r[2], r[3]]]
 }
 
 impl<const N: usize> PlaneMesh<N> {

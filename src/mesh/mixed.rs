@@ -4,7 +4,7 @@
 //! its own kind.
 
 use super::element::Shape;
-use super::linear::{orientation_flips, BoundaryEdge, Point2};
+use super::linear::{cut_quad, orientation_flips, BoundaryEdge, BoundaryFace, HexMesh, Point2, Point3, TetMesh};
 
 /// One linear cell of a mixed plane mesh, its corners counter-clockwise.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -177,6 +177,80 @@ impl SolidCell {
     }
 }
 
+/// The three tetrahedra of a (sub-)prism with corners `v` (Gmsh's order,
+/// positively oriented), each quad face cut along the diagonal through its
+/// smallest node number, so that neighbours cut a shared face alike
+/// (Dompierre, Labbé, Vallet & Camarero, "How to subdivide pyramids,
+/// prisms and hexaedra into tetrahedra", 1999). Every tetrahedron is
+/// oriented like the prism.
+pub fn prism_tets(v: [usize; 6]) -> [[usize; 4]; 3] {
+    // turn the prism (rotations of the triangle; top and bottom swapped
+    // with a mirror, which keeps the orientation) until its smallest
+    // node is vertex 0
+    const TURNS: [[usize; 6]; 6] = [[0, 1, 2, 3, 4, 5], [1, 2, 0, 4, 5, 3], [2, 0, 1, 5, 3, 4], [3, 5, 4, 0, 2, 1], [4, 3, 5, 1, 0, 2], [5, 4, 3, 2, 1, 0]];
+    let low = (0..6).min_by_key(|&a| v[a]).expect("six corners");
+    let r = TURNS[low].map(|a| v[a]);
+    if r[1].min(r[5]) < r[2].min(r[4]) {
+        [[r[0], r[1], r[2], r[5]], [r[0], r[1], r[5], r[4]], [r[0], r[4], r[5], r[3]]]
+    } else {
+        [[r[0], r[1], r[2], r[4]], [r[0], r[4], r[2], r[5]], [r[0], r[4], r[5], r[3]]]
+    }
+}
+
+/// The two tetrahedra of a (sub-)pyramid with corners `v` (base, then
+/// apex; positively oriented), its base cut along the diagonal through
+/// its smallest node number ([`prism_tets`]'s rule), each oriented like
+/// the pyramid.
+pub fn pyramid_tets(v: [usize; 5]) -> [[usize; 4]; 2] {
+    let [a, b] = cut_quad([v[0], v[1], v[2], v[3]]);
+    [[a[0], a[1], a[2], v[4]], [b[0], b[1], b[2], v[4]]]
+}
+
+/// The six pyramids of a (sub-)hex with corners `h` (Gmsh's order,
+/// positively oriented) and a node `centre` inside: one on each face,
+/// apex at the centre, each oriented like the hex.
+pub fn hex_pyramids(h: [usize; 8], centre: usize) -> impl Iterator<Item = [usize; 5]> {
+    // the faces run counter-clockwise seen from outside: reversed, seen
+    // from the centre
+    Shape::Hexahedron.faces().iter().map(move |(_, f)| [h[f[0]], h[f[3]], h[f[2]], h[f[1]], centre])
+}
+
+/// The twelve tetrahedra of a (sub-)hex with corners `h` (Gmsh's order,
+/// positively oriented) and a node `centre` inside: its
+/// [`hex_pyramids`], each cut by [`pyramid_tets`].
+pub fn hex_tets(h: [usize; 8], centre: usize) -> impl Iterator<Item = [usize; 4]> {
+    hex_pyramids(h, centre).flat_map(pyramid_tets)
+}
+
+/// The six tetrahedra of a hex `h` (Gmsh's order, positively oriented)
+/// along its diagonal from corner 0 to corner 6: one per order in which a
+/// path along the edges takes the three axes, each oriented like the hex.
+fn kuhn_tets(h: &[usize; 8]) -> [[usize; 4]; 6] {
+    // the corner at bits (x, y, z)
+    let at = |b: [usize; 3]| h[4 * b[2] + [[0, 3], [1, 2]][b[0]][b[1]]];
+    // even orders of the axes first: the odd ones swap the last two corners
+    const ORDERS: [[usize; 3]; 6] = [[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]];
+    std::array::from_fn(|k| {
+        let [a, b, _] = ORDERS[k];
+        let mut bits = [0; 3];
+        let v0 = at(bits);
+        bits[a] = 1;
+        let v1 = at(bits);
+        bits[b] = 1;
+        let (v2, v3) = (at(bits), h[6]);
+        if k < 3 {
+            [v0, v1, v2, v3]
+        } else {
+            [v0, v1, v3, v2]
+        }
+    })
+}
+
+/// The mean of the nodes `of`.
+fn mean_of(of: &[usize], nodes: &[Point3]) -> Point3 {
+    std::array::from_fn(|d| of.iter().map(|&v| nodes[v][d]).sum::<f64>() / of.len() as f64)
+}
+
 fn triple(u: [f64; 3], v: [f64; 3], w: [f64; 3]) -> f64 {
     u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])
 }
@@ -216,6 +290,87 @@ impl MixedSolidMesh {
         out.sort();
         out.dedup();
         out
+    }
+
+    /// A structured `n[0] × n[1] × n[2]` brick `[lo, hi]` of `kind`
+    /// cells ([`HexMesh::structured_box`]'s nodes and faces, parts named as
+    /// in [`super::BOX_FACES`]), or `None` for a kind that is not a solid's:
+    /// - hexahedra as they are;
+    /// - prisms: each hex cut in two along the diagonal of its bottom
+    ///   square from the lower corner, the bottom and top faces into
+    ///   triangles alike;
+    /// - pyramids: six per hex, one on each face, their apex at a new node
+    ///   at the hex's centre;
+    /// - tetrahedra: six per hex along its diagonal from the lower to the
+    ///   upper corner (Kuhn's cut: every face cut on its diagonal through
+    ///   the lower corner, so neighbours agree), boundary squares alike.
+    pub fn structured_box(lo: Point3, hi: Point3, n: [usize; 3], kind: Shape) -> Option<MixedSolidMesh> {
+        let HexMesh { mut nodes, cells: hexes, faces: quads, part_names } = HexMesh::structured_box(lo, hi, n);
+        let quad_faces = || quads.iter().map(|f| (f.nodes.to_vec(), f.part)).collect::<Vec<_>>();
+        // the structured box numbers its nodes lexicographically: a
+        // square's smallest node is its lower corner
+        let triangle_faces = |cut: fn(usize) -> bool| {
+            let split = |f: &BoundaryFace| cut_quad(f.nodes).map(|t| (t.to_vec(), f.part)).to_vec();
+            quads.iter().flat_map(|f| if cut(f.part) { split(f) } else { vec![(f.nodes.to_vec(), f.part)] }).collect::<Vec<_>>()
+        };
+        let (cells, faces) = match kind {
+            Shape::Hexahedron => (hexes.iter().map(|&h| SolidCell::Hex(h)).collect(), quad_faces()),
+            Shape::Prism => {
+                let cells = hexes.iter().flat_map(|h| [[h[0], h[1], h[2], h[4], h[5], h[6]], [h[0], h[2], h[3], h[4], h[6], h[7]]].map(SolidCell::Prism)).collect();
+                // the zmin and zmax faces
+                (cells, triangle_faces(|part| part >= 4))
+            }
+            Shape::Pyramid => {
+                let mut cells = Vec::with_capacity(6 * hexes.len());
+                for h in &hexes {
+                    nodes.push(mean_of(&h[..], &nodes));
+                    cells.extend(hex_pyramids(*h, nodes.len() - 1).map(SolidCell::Pyramid));
+                }
+                (cells, quad_faces())
+            }
+            Shape::Tetrahedron => (hexes.iter().flat_map(kuhn_tets).map(SolidCell::Tet).collect(), triangle_faces(|_| true)),
+            _ => return None,
+        };
+        Some(MixedSolidMesh { nodes, cells, faces, part_names })
+    }
+
+    /// The mesh as a [`TetMesh`] if all its cells are tetrahedra and its
+    /// boundary faces triangles.
+    pub fn to_tet_mesh(&self) -> Option<TetMesh> {
+        let cells = self.cells.iter().map(|c| if let SolidCell::Tet(t) = c { Some(*t) } else { None }).collect::<Option<Vec<_>>>()?;
+        let faces = self.faces.iter().map(|(f, part)| Some(BoundaryFace { nodes: <[usize; 3]>::try_from(f.as_slice()).ok()?, part: *part })).collect::<Option<Vec<_>>>()?;
+        Some(TetMesh { nodes: self.nodes.clone(), cells, faces, part_names: self.part_names.clone() })
+    }
+
+    /// The mesh cut into tetrahedra (prisms by [`prism_tets`], pyramids by
+    /// [`pyramid_tets`], hexes by [`hex_tets`] about a new node at each
+    /// one's centre, after the mesh's nodes), its boundary quads by
+    /// [`cut_quad`] as the cells beside them are; and the cell each
+    /// tetrahedron was cut from.
+    pub fn tetrahedra(&self) -> (TetMesh, Vec<usize>) {
+        let mut nodes = self.nodes.clone();
+        let (mut cells, mut owner) = (Vec::with_capacity(3 * self.cells.len()), Vec::with_capacity(3 * self.cells.len()));
+        for (c, cell) in self.cells.iter().enumerate() {
+            match *cell {
+                SolidCell::Tet(t) => cells.push(t),
+                SolidCell::Prism(v) => cells.extend(prism_tets(v)),
+                SolidCell::Pyramid(v) => cells.extend(pyramid_tets(v)),
+                SolidCell::Hex(h) => {
+                    nodes.push(mean_of(&h[..], &nodes));
+                    cells.extend(hex_tets(h, nodes.len() - 1));
+                }
+            }
+            owner.resize(cells.len(), c);
+        }
+        let faces = self
+            .faces
+            .iter()
+            .flat_map(|(f, part)| match f[..] {
+                [a, b, c, d] => cut_quad([a, b, c, d]).map(|t| BoundaryFace { nodes: t, part: *part }).to_vec(),
+                _ => vec![BoundaryFace { nodes: [f[0], f[1], f[2]], part: *part }],
+            })
+            .collect();
+        (TetMesh { nodes, cells, faces, part_names: self.part_names.clone() }, owner)
     }
 
     /// The cells with det J ≤ 0 at a vertex.
@@ -266,6 +421,51 @@ mod tests {
         assert!(upside_down.corner_jacobians(&at).iter().all(|&j| j < 0.0));
         let m = MixedSolidMesh { nodes: folded, cells: vec![prism, SolidCell::Tet([0, 1, 2, 3])], faces: Vec::new(), part_names: Vec::new() };
         assert_eq!((m.invalid_cells(), m.count(Shape::Prism)), (vec![0], 1));
+    }
+
+    /// Every kind's brick is made of positive cells that fill it, every
+    /// cell face is held twice or is a boundary face of the part it is on.
+    #[test]
+    fn bricks_of_every_solid_kind_are_conforming_and_fill_the_brick() {
+        use std::collections::HashMap;
+        let (lo, hi, n) = ([0.0, -1.0, 2.0], [1.0, 1.5, 2.75], [3, 2, 2]);
+        let expected = [(Shape::Tetrahedron, 72), (Shape::Pyramid, 72), (Shape::Prism, 24), (Shape::Hexahedron, 12)];
+        for (kind, count) in expected {
+            let m = MixedSolidMesh::structured_box(lo, hi, n, kind).unwrap();
+            assert_eq!((m.count(kind), m.cells.len()), (count, count), "{kind:?}");
+            let mut volume = 0.0;
+            let mut held: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
+            for c in &m.cells {
+                // affine cells: det J is the same at every corner
+                let j = c.corner_jacobians(&m.nodes);
+                assert!(j.iter().all(|&x| x > 0.0 && (x - j[0]).abs() < 1e-12 * j[0]), "{kind:?} {j:?}");
+                volume += j[0] * kind.volume();
+                for f in c.faces() {
+                    let mut key = f.clone();
+                    key.sort_unstable();
+                    held.entry(key).or_insert((0, f)).0 += 1;
+                }
+            }
+            assert!((volume - 1.0 * 2.5 * 0.75).abs() < 1e-12, "{kind:?} {volume}");
+            let once: Vec<&Vec<usize>> = held.values().filter(|h| h.0 == 1).map(|h| &h.1).collect();
+            assert!(held.values().all(|h| h.0 <= 2));
+            assert_eq!(once.len(), m.faces.len(), "{kind:?}");
+            for (f, part) in &m.faces {
+                let mut key = f.clone();
+                key.sort_unstable();
+                let (count, cell_face) = &held[&key];
+                // the boundary face is the cell's, in the same turn
+                let turn = (0..f.len()).find(|&r| (0..f.len()).all(|k| f[(k + r) % f.len()] == cell_face[k]));
+                assert!(*count == 1 && turn.is_some(), "{kind:?} {f:?}");
+                // on the brick face of its part
+                let (axis, side) = (part / 2, part % 2);
+                let plane = if side == 0 { lo[axis] } else { hi[axis] };
+                assert!(f.iter().all(|&v| m.nodes[v][axis] == plane), "{kind:?} {f:?} {part}");
+            }
+        }
+        assert_eq!(MixedSolidMesh::structured_box(lo, hi, n, Shape::Triangle), None);
+        assert!(MixedSolidMesh::structured_box(lo, hi, n, Shape::Tetrahedron).unwrap().to_tet_mesh().is_some());
+        assert!(MixedSolidMesh::structured_box(lo, hi, n, Shape::Prism).unwrap().to_tet_mesh().is_none());
     }
 
     /// The corner Jacobians of the reference pyramid and hex are 1, scale

@@ -29,7 +29,7 @@ fn case3(file: &str, edit: impl Fn(&mut Case)) -> Setup<HexMesh, 3> {
     edit(&mut case);
     match case.setup_any(file, path.parent().unwrap()).unwrap() {
         AnySetup::Hex(s) => s,
-        AnySetup::Quad(_) => panic!("{file} is 2D"),
+        _ => panic!("{file} is not of hexahedra"),
     }
 }
 

@@ -16,7 +16,7 @@ fn setup(file: &str, edit: impl Fn(&mut Case)) -> Setup<HexMesh, 3> {
     edit(&mut case);
     match case.setup_any(file, path.parent().unwrap()).unwrap() {
         AnySetup::Hex(s) => s,
-        AnySetup::Quad(_) => panic!("{file} is not 3D"),
+        _ => panic!("{file} is not of hexahedra"),
     }
 }
 
@@ -135,7 +135,7 @@ fn brick_onto(shape: &str, correspondence: &str, extra: &str) -> Setup<HexMesh, 
     );
     match Case::parse(&text, "brick").unwrap().setup_any("brick", Path::new(".")).unwrap() {
         AnySetup::Hex(s) => s,
-        AnySetup::Quad(_) => unreachable!(),
+        _ => unreachable!(),
     }
 }
 

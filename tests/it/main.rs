@@ -14,6 +14,7 @@ mod cli;
 mod curve_import;
 mod deformation;
 mod deformation3d;
+mod every_kind;
 mod highorder;
 mod kept;
 mod level_sets;

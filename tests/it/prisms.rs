@@ -43,7 +43,7 @@ fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, Pat
 
 /// The largest `distance` of a node of a boundary element of `group` in
 /// the written file.
-fn group_off<const D: usize>(file: &Path, group: &str, distance: impl Fn([f64; D]) -> f64) -> (f64, usize) {
+pub(crate) fn group_off<const D: usize>(file: &Path, group: &str, distance: impl Fn([f64; D]) -> f64) -> (f64, usize) {
     let mesh = CurvedMesh::<D>::read_msh(file).unwrap();
     let part = mesh.part_names.iter().position(|n| n == group).unwrap();
     let nodes: Vec<usize> = mesh.boundary.iter().filter(|b| b.part == part).flat_map(|b| b.nodes.clone()).collect();
@@ -57,7 +57,7 @@ fn group_off<const D: usize>(file: &Path, group: &str, distance: impl Fn([f64; D
 /// bound, Gmsh's det J sampled on the element never below our lower bound
 /// and its least within 1 % of ours. Returns the number of elements it
 /// judged.
-fn gmsh_agrees(file: &Path, counts: &[(i64, usize)]) -> usize {
+pub(crate) fn gmsh_agrees(file: &Path, counts: &[(i64, usize)]) -> usize {
     let g = common::run_checker("check_msh.py", file);
     for &(ty, count) in counts {
         assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);

@@ -40,7 +40,7 @@ fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, Pat
 /// simplex as ours) is never above a value our det J takes and within
 /// `rel` of our certified bound; its sampled scaled Jacobian (minSIGE) is
 /// within `sj` of ours. Returns the largest differences.
-fn gmsh_agrees_simplex<const D: usize>(file: &Path, ty: i64, count: usize, rel: f64, sj: f64) -> (f64, f64) {
+pub(crate) fn gmsh_agrees_simplex<const D: usize>(file: &Path, ty: i64, count: usize, rel: f64, sj: f64) -> (f64, f64) {
     gmsh_agrees_kinds::<D>(file, &[(ty, count, 1.0)], rel, Some(sj))
 }
 
