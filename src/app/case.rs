@@ -649,8 +649,7 @@ impl Case {
             return Ok(AnySetup::Tet(Setup { name, mesh, parts, field, options, output, highorder }));
         }
         let mesh = CutSolid::new(solid);
-        let (tets, _) = mesh.solid().tetrahedra();
-        check(&mut solid_points(&tets))?;
+        check(&mut solid_points(mesh.tets()))?;
         Ok(AnySetup::Cut(Setup { name, mesh, parts, field, options, output, highorder }))
     }
 

@@ -887,7 +887,7 @@ impl Outputs<3, 4> for CutSolid {
     fn quality(&self) -> MeshQuality {
         let solid = self.solid();
         let (certs, _) = certify_mesh(&CurvedMesh::from_mixed_solid(&solid)).expect("order 1 of every solid kind");
-        let volumes = self.written_sums(&Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| self.nodes()[n]))).collect::<Vec<_>>());
+        let volumes = self.written_sums(&self.cell_sizes(self.nodes()));
         MeshQuality {
             cells: solid.cells.len(),
             nodes: solid.nodes.len(),
@@ -911,8 +911,7 @@ impl Outputs<3, 4> for CutSolid {
         CurvedMesh::from_mixed_solid(&self.solid()).vtu_string(cell_data)
     }
     fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        let solid = MixedSolidMesh { nodes: nodes[..self.solid().nodes.len()].to_vec(), ..self.solid() };
-        Self::draw_curved(&CurvedMesh::from_mixed_solid(&solid), values, look)
+        Self::draw_curved(&CurvedMesh::from_mixed_solid(&self.solid_at(nodes)), values, look)
     }
     fn written_ratios(&self, nodes: &[Point3], values: &[f64]) -> Vec<f64> {
         // a cell's ratio is its tetrahedra's volume over the sum of what

@@ -40,7 +40,18 @@ impl CutSolid {
 
     /// The cells at the current positions.
     pub fn solid(&self) -> MixedSolidMesh {
-        MixedSolidMesh { nodes: self.tets.nodes[..self.solid.nodes.len()].to_vec(), ..self.solid.clone() }
+        self.solid_at(&self.tets.nodes)
+    }
+
+    /// The cells at positions `nodes` (of the tetrahedra's nodes: the
+    /// hexes' centres, after the cells' nodes, are left out).
+    pub fn solid_at(&self, nodes: &[Point3]) -> MixedSolidMesh {
+        MixedSolidMesh { nodes: nodes[..self.solid.nodes.len()].to_vec(), cells: self.solid.cells.clone(), faces: self.solid.faces.clone(), part_names: self.solid.part_names.clone() }
+    }
+
+    /// The tetrahedra Algorithm 1 solves on, at the current positions.
+    pub fn tets(&self) -> &TetMesh {
+        &self.tets
     }
 
     /// The cells.

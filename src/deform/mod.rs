@@ -263,9 +263,6 @@ pub enum DeformError {
     /// The starting mesh is invalid.
     #[error("the starting mesh has {} inverted cell(s), first {:?}", .0.len(), &.0[..(.0.len().min(10))])]
     InvalidStart(Vec<usize>),
-    /// Algorithm 1 has no boundary model for this kind of mesh.
-    #[error("Algorithm 1 (`run`) does not deform {0} yet: their boundary model is that of `curve` (Algorithm 2)")]
-    NoBoundaryModel(&'static str),
 }
 
 /// A linear solve that failed every way tried: the last error and, in

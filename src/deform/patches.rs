@@ -1,6 +1,7 @@
 //! The 3D boundary model: the boundary faces (quads or triangles) of a
-//! hex or tetrahedral mesh grouped into planar patches (one per box face and part), the feature edges where two
-//! patches meet, and the corners where three or more meet.
+//! hex or tetrahedral mesh grouped into planar patches (one per box face
+//! and part), the feature edges where two patches meet, and the corners
+//! where three or more meet.
 //!
 //! - A node inside a patch is constrained like a 2D chain node: `u·n = 0`
 //!   on a slip wall, `u·n = v·n/f` on a sliding moving patch, `u = v/f`
@@ -19,7 +20,7 @@
 use super::{BoundaryModel, BoundaryPart, DeformError, MoveMode, PartKind, Q1Mesh};
 use crate::jacobian::facet_flux_points;
 use crate::lsfem::Constraint;
-use crate::mesh::{HexMesh, Point3, SolidMesh, TetMesh};
+use crate::mesh::{Point3, SolidMesh};
 use crate::numeric::{cross3 as cross, dot, sub, unit};
 use crate::quality::cell_size;
 use std::collections::HashMap;
@@ -380,43 +381,13 @@ impl BoundaryModel<3> for Patches {
     }
 }
 
-impl Q1Mesh<3, 8> for HexMesh {
+/// Hexahedral and tetrahedral meshes alike: Algorithm 1's patches from
+/// their boundary quads or triangles (`curve` builds Algorithm 2's
+/// boundary model on the refined mesh, [`crate::refine`]).
+impl<const N: usize, const K: usize> Q1Mesh<3, N> for SolidMesh<N, K> {
     type Boundary = Patches;
 
-    fn cells(&self) -> &[[usize; 8]] {
-        &self.cells
-    }
-
-    fn nodes(&self) -> &[Point3] {
-        &self.nodes
-    }
-
-    fn nodes_mut(&mut self) -> &mut Vec<Point3> {
-        &mut self.nodes
-    }
-
-    fn flux_points<'a>(&'a self, nodes: &'a [Point3], v: &'a [Point3]) -> impl Iterator<Item = (Point3, f64)> + 'a {
-        facet_flux_points(self.faces.iter().map(|f| f.nodes), nodes, v)
-    }
-
-    fn measure(&self) -> f64 {
-        (0..self.num_cells()).map(|c| cell_size(&self.cell_coords(c))).sum()
-    }
-
-    fn boundary(&self, parts: Vec<BoundaryPart<3>>) -> Result<Patches, DeformError> {
-        let b = classify(self, parts)?;
-        b.check_reachable(self)?;
-        Ok(b)
-    }
-}
-
-/// A tetrahedral mesh: Algorithm 1's patches from its boundary triangles
-/// (`curve` builds Algorithm 2's boundary model on the refined mesh,
-/// [`crate::refine`]).
-impl Q1Mesh<3, 4> for TetMesh {
-    type Boundary = Patches;
-
-    fn cells(&self) -> &[[usize; 4]] {
+    fn cells(&self) -> &[[usize; N]] {
         &self.cells
     }
 
