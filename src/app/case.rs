@@ -4,14 +4,14 @@
 //! Every table rejects unknown fields, and every error names the file and
 //! the field (toml's own errors add the line and column).
 
-use crate::deform::{BoundaryPart, Correspondence, CutSolid, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
+use crate::deform::{BoundaryPart, Correspondence, CutPlane, CutSolid, DeformOptions, Integrator, MoveMode, PartKind, SolverChoice};
 use crate::expr::Expr;
 use crate::geometry::{shape_from_toml, spec_from_toml, LevelSet, ShapeSpec, SurfaceSpec};
 use crate::highorder::curve::CurveOptions;
 use crate::highorder::{check_order, Spacing};
 use crate::jacobian::{lift, ImageField, JacobianError, Interface, JacobianField, Locus, SmallWhere, Target, TimePath, EXPR_VARS};
 use crate::mesh::element::Shape;
-use crate::mesh::{HexMesh, MixedSolidMesh, PlaneMesh, QuadMesh, SolidMesh, TetMesh, TriMesh, BOX_FACES, BOX_SIDES};
+use crate::mesh::{HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneMesh, QuadMesh, SolidMesh, TetMesh, TriMesh, BOX_FACES, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -86,18 +86,23 @@ pub enum ElementsSpec {
     Prism,
     /// Six pyramids per box cell, their apex at its centre (3D).
     Pyramid,
+    /// Kinds side by side, each meeting the other: in 2D quadrilaterals
+    /// and triangle pairs in a checkerboard; in 3D columns of hexahedra
+    /// and of prisms in a checkerboard (along z).
+    Mixed,
 }
 
 impl ElementsSpec {
-    /// The element kind.
-    pub fn shape(self) -> Shape {
+    /// The element kind (`None` for mixed kinds).
+    pub fn shape(self) -> Option<Shape> {
         match self {
-            ElementsSpec::Quadrilateral => Shape::Quadrilateral,
-            ElementsSpec::Triangle => Shape::Triangle,
-            ElementsSpec::Hexahedron => Shape::Hexahedron,
-            ElementsSpec::Tetrahedron => Shape::Tetrahedron,
-            ElementsSpec::Prism => Shape::Prism,
-            ElementsSpec::Pyramid => Shape::Pyramid,
+            ElementsSpec::Quadrilateral => Some(Shape::Quadrilateral),
+            ElementsSpec::Triangle => Some(Shape::Triangle),
+            ElementsSpec::Hexahedron => Some(Shape::Hexahedron),
+            ElementsSpec::Tetrahedron => Some(Shape::Tetrahedron),
+            ElementsSpec::Prism => Some(Shape::Prism),
+            ElementsSpec::Pyramid => Some(Shape::Pyramid),
+            ElementsSpec::Mixed => None,
         }
     }
 }
@@ -474,8 +479,10 @@ pub enum AnySetup {
     Hex(Setup<HexMesh, 3>),
     /// Tetrahedra.
     Tet(Setup<TetMesh, 3>),
-    /// Prisms or pyramids, moved through their tetrahedra.
+    /// Prisms, pyramids or mixed solids, moved through their tetrahedra.
     Cut(Setup<CutSolid, 3>),
+    /// Quadrilaterals and triangles, moved through triangles.
+    CutPlane(Setup<CutPlane, 2>),
 }
 
 impl AnySetup {
@@ -487,6 +494,7 @@ impl AnySetup {
             AnySetup::Hex(s) => &s.name,
             AnySetup::Tet(s) => &s.name,
             AnySetup::Cut(s) => &s.name,
+            AnySetup::CutPlane(s) => &s.name,
         }
     }
 }
@@ -606,9 +614,9 @@ impl Case {
             ..Default::default()
         };
         let kind = m.elements.unwrap_or(if dim == 2 { ElementsSpec::Quadrilateral } else { ElementsSpec::Hexahedron });
-        if kind.shape().dim() != dim {
+        if let Some(made) = kind.shape().map(|s| s.dim()).filter(|&d| d != dim) {
             let named = format!("{kind:?}").to_lowercase();
-            return Err(err(format!("field `mesh.elements`: `{named}` elements make a {}D mesh, but `mesh.lower` has {dim} numbers", kind.shape().dim())));
+            return Err(err(format!("field `mesh.elements`: `{named}` elements make a {made}D mesh, but `mesh.lower` has {dim} numbers")));
         }
         let check = |points: &mut dyn Iterator<Item = [f64; 3]>| check_positive(&field, points).map_err(|e| err(format!("field `jacobian`: {e}")));
         if dim == 2 {
@@ -617,6 +625,14 @@ impl Case {
             let names: Vec<String> = parts.iter().map(|p| p.name.clone()).collect();
             // re-tag the box's side indices with part indices
             let retag = |edges: &mut Vec<crate::mesh::BoundaryEdge>| edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
+            if kind == ElementsSpec::Mixed {
+                let mut mesh = MixedPlaneMesh::structured_box(lo, hi, m.cells[0], m.cells[1]);
+                retag(&mut mesh.edges);
+                mesh.part_names = names;
+                let mesh = CutPlane::new(mesh);
+                check(&mut plane_points(mesh.simplices()))?;
+                return Ok(AnySetup::CutPlane(Setup { name, mesh, parts, field, options, output, highorder }));
+            }
             if kind == ElementsSpec::Triangle {
                 let mut mesh = TriMesh::structured_box(lo, hi, m.cells[0], m.cells[1]);
                 retag(&mut mesh.edges);
@@ -640,7 +656,10 @@ impl Case {
             check(&mut solid_points(&mesh))?;
             return Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output, highorder }));
         }
-        let mut solid = MixedSolidMesh::structured_box(lo, hi, n, kind.shape()).expect("a solid kind");
+        let mut solid = match kind.shape() {
+            Some(shape) => MixedSolidMesh::structured_box(lo, hi, n, shape).expect("a solid kind"),
+            None => MixedSolidMesh::hex_prism_box(lo, hi, n),
+        };
         solid.faces.iter_mut().for_each(|f| f.1 = face_part[f.1]);
         solid.part_names = names;
         if let Some(mut mesh) = solid.to_tet_mesh() {
@@ -649,7 +668,7 @@ impl Case {
             return Ok(AnySetup::Tet(Setup { name, mesh, parts, field, options, output, highorder }));
         }
         let mesh = CutSolid::new(solid);
-        check(&mut solid_points(mesh.tets()))?;
+        check(&mut solid_points(mesh.simplices()))?;
         Ok(AnySetup::Cut(Setup { name, mesh, parts, field, options, output, highorder }))
     }
 

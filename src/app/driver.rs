@@ -7,7 +7,7 @@
 
 use crate::app::case::{AnySetup, CaseError, Colour, OutputSpec, Setup};
 use crate::refine::Subdividable;
-use crate::deform::{BoundaryPart, CutSolid, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
+use crate::deform::{BoundaryPart, Cut, Cuttable, DeformError, Deformation, Integrator, Q1Mesh, SolverReport};
 use crate::highorder::curve::{certify_mesh, curve_with_progress, CurveError, CurveOptions, Curved, CurvedQuality};
 use crate::highorder::Spacing;
 use crate::mesh::CurvedMesh;
@@ -279,8 +279,8 @@ pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Curvable<D> {
     fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError>;
     /// Per written cell, from per-cell ratios of the current size to an
     /// additive measure (J/f, a size ratio) on Algorithm 1's cells at
-    /// positions `nodes`: the same cells, but for solids cut into
-    /// tetrahedra ([`CutSolid`]).
+    /// positions `nodes`: the same cells, but for meshes of several kinds
+    /// cut into simplices ([`Cut`]).
     fn written_ratios(&self, _nodes: &[[f64; D]], values: &[f64]) -> Vec<f64> {
         values.to_vec()
     }
@@ -354,8 +354,7 @@ impl<const N: usize> Curvable<2> for PlaneMesh<N> {
     }
 }
 
-/// Quads and triangles together: `curve` only (Algorithm 1's cases make
-/// meshes of one kind).
+/// Quads and triangles together (Algorithm 1 moves them as a [`Cut`]).
 impl Curvable<2> for MixedPlaneMesh {
     fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
         crate::highorder::curve::curve_mixed(self, parts, opts, algorithm2(progress))
@@ -449,6 +448,7 @@ pub fn run_any(setup: AnySetup, out_dir: &Path, progress: impl FnMut(Progress)) 
         AnySetup::Hex(s) => run_setup(s, out_dir, progress),
         AnySetup::Tet(s) => run_setup(s, out_dir, progress),
         AnySetup::Cut(s) => run_setup(s, out_dir, progress),
+        AnySetup::CutPlane(s) => run_setup(s, out_dir, progress),
     }
 }
 
@@ -876,46 +876,68 @@ fn curve_mixed_solid(mut mesh: MixedSolidMesh, binding: &Binding, job: (&CurveJo
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
 }
 
-/// Solids of prisms, pyramids or mixed kinds: Algorithm 1 on their
-/// tetrahedra, everything written and drawn by their own cells.
-impl Outputs<3, 4> for CutSolid {
+/// What the figures of a mesh of several kinds mean: Algorithm 1 solves
+/// on the simplices cut from its cells ([`Cut`]).
+pub trait CutWords {
+    /// See [`Outputs::DEFINITIONS`].
+    const DEFINITIONS: Definitions;
+}
+
+impl CutWords for MixedSolidMesh {
     const DEFINITIONS: Definitions = Definitions {
         det_j: "determinant of each cell's linear map from its reference element (Gmsh's vertices, mapped to [0,1]-based ones: tetrahedron, prism, pyramid, cube), bounded by its Bezier coefficients as the curved elements are (order 1)",
         scaled_jacobian: "per cell, det J/(product of the column norms of J), its minimum on the order-1 certificate's sampling grid",
         jf: "Algorithm 1 solves on the tetrahedra cut from the cells: the figures are per tetrahedron, |K_t| / integral over K_0 of f(phi(xi)) dxi (4-point rule); the pictures and VTU show each cell's, the volume of its tetrahedra over the sum of their integrals",
     };
+}
+
+impl CutWords for MixedPlaneMesh {
+    const DEFINITIONS: Definitions = Definitions {
+        det_j: "determinant of each cell's linear map from its reference element (triangle (0,0),(1,0),(0,1); square [0,1]^2), bounded by its Bezier coefficients as the curved elements are (order 1)",
+        scaled_jacobian: "per cell, det J/(product of the column norms of J), its minimum on the order-1 certificate's sampling grid",
+        jf: "Algorithm 1 solves on the triangles cut from the cells: the figures are per triangle, |K_t| / integral over K_0 of f(phi(xi)) dxi (3-point rule); the pictures and VTU show each cell's, the area of its triangles over the sum of their integrals",
+    };
+}
+
+/// Meshes of several kinds: Algorithm 1 on their simplices, everything
+/// written and drawn by their own cells.
+impl<M, const D: usize, const N: usize> Outputs<D, N> for Cut<M, D, N>
+where
+    M: Cuttable<D, N> + Curvable<D> + CutWords,
+{
+    const DEFINITIONS: Definitions = M::DEFINITIONS;
     fn quality(&self) -> MeshQuality {
-        let solid = self.solid();
-        let (certs, _) = certify_mesh(&CurvedMesh::from_mixed_solid(&solid)).expect("order 1 of every solid kind");
-        let volumes = self.written_sums(&self.cell_sizes(self.nodes()));
+        let curved = self.mesh().as_curved();
+        let (certs, _) = certify_mesh(&curved).expect("order 1 of every kind");
+        let sizes = self.written_sums(&self.cell_sizes(self.nodes()));
         MeshQuality {
-            cells: solid.cells.len(),
-            nodes: solid.nodes.len(),
+            cells: curved.cells.len(),
+            nodes: curved.nodes.len(),
             det_j: Range { min: certs.iter().map(|c| c.min_det_lower).fold(f64::INFINITY, f64::min), max: certs.iter().map(|c| c.max_det).fold(f64::NEG_INFINITY, f64::max) },
             scaled_jacobian: Range::of(certs.iter().map(|c| c.min_scaled_jacobian)),
             invalid_cells: (0..certs.len()).filter(|&c| !certs[c].valid).collect(),
-            cell_size: Range::of(volumes.iter().copied()),
+            cell_size: Range::of(sizes.iter().copied()),
         }
     }
     fn scaled_jacobians(&self) -> Vec<f64> {
-        let (certs, _) = certify_mesh(&CurvedMesh::from_mixed_solid(&self.solid())).expect("order 1 of every solid kind");
+        let (certs, _) = certify_mesh(&self.mesh().as_curved()).expect("order 1 of every kind");
         certs.iter().map(|c| c.min_scaled_jacobian).collect()
     }
-    fn cell_sizes(&self, nodes: &[Point3]) -> Vec<f64> {
+    fn cell_sizes(&self, nodes: &[[f64; D]]) -> Vec<f64> {
         Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| nodes[n]))).collect()
     }
     fn msh(&self) -> Result<String, MshError> {
-        CurvedMesh::from_mixed_solid(&self.solid()).msh_string()
+        self.mesh().as_curved().msh_string()
     }
     fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
-        CurvedMesh::from_mixed_solid(&self.solid()).vtu_string(cell_data)
+        self.mesh().as_curved().vtu_string(cell_data)
     }
-    fn draw(&self, nodes: &[Point3], values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        Self::draw_curved(&CurvedMesh::from_mixed_solid(&self.solid_at(nodes)), values, look)
+    fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError> {
+        M::draw_curved(&self.mesh_at(nodes).as_curved(), values, look)
     }
-    fn written_ratios(&self, nodes: &[Point3], values: &[f64]) -> Vec<f64> {
-        // a cell's ratio is its tetrahedra's volume over the sum of what
-        // each one's ratio divides
+    fn written_ratios(&self, nodes: &[[f64; D]], values: &[f64]) -> Vec<f64> {
+        // a cell's ratio is its simplices' size over the sum of what each
+        // one's ratio divides
         let sizes = self.cell_sizes(nodes);
         let under: Vec<f64> = sizes.iter().zip(values).map(|(s, r)| s / r).collect();
         self.written_sums(&sizes).iter().zip(self.written_sums(&under)).map(|(s, u)| s / u).collect()
@@ -925,12 +947,15 @@ impl Outputs<3, 4> for CutSolid {
     }
 }
 
-impl Curvable<3> for CutSolid {
-    fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
-        self.solid().curve(parts, opts, progress)
+impl<M, const D: usize, const N: usize> Curvable<D> for Cut<M, D, N>
+where
+    M: Cuttable<D, N> + Curvable<D>,
+{
+    fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<D>, CurveError> {
+        self.mesh().curve(parts, opts, progress)
     }
-    fn draw_curved(mesh: &CurvedMesh<3>, values: &[f64], look: &Look<3>) -> Result<tiny_skia::Pixmap, RenderError> {
-        MixedSolidMesh::draw_curved(mesh, values, look)
+    fn draw_curved(mesh: &CurvedMesh<D>, values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError> {
+        M::draw_curved(mesh, values, look)
     }
 }
 

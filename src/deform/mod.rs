@@ -34,7 +34,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use chains::Chains;
-pub use cut::CutSolid;
+pub use cut::{Cut, CutPlane, CutSolid, Cuttable};
 pub use patches::Patches;
 
 /// How a point of the starting boundary finds its place on the target.

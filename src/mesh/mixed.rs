@@ -4,7 +4,7 @@
 //! its own kind.
 
 use super::element::Shape;
-use super::linear::{cut_quad, orientation_flips, BoundaryEdge, BoundaryFace, HexMesh, Point2, Point3, TetMesh};
+use super::linear::{cut_quad, orientation_flips, BoundaryEdge, BoundaryFace, HexMesh, Point2, Point3, QuadMesh, TetMesh, TriMesh};
 
 /// One linear cell of a mixed plane mesh, its corners counter-clockwise.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,6 +64,39 @@ impl MixedPlaneMesh {
     /// How many cells are of `shape`.
     pub fn count(&self, shape: Shape) -> usize {
         self.cells.iter().filter(|c| c.shape() == shape).count()
+    }
+
+    /// A structured `nx × ny` box `[lo, hi]` ([`QuadMesh::structured_box`]'s
+    /// nodes and sides) of quads and triangles in a checkerboard: the cell
+    /// (i, j) is a quad where i + j is even, else two triangles cut along
+    /// its diagonal from the lower left corner. Every kind meets the other
+    /// across an edge.
+    pub fn structured_box(lo: Point2, hi: Point2, nx: usize, ny: usize) -> MixedPlaneMesh {
+        let QuadMesh { nodes, cells: quads, edges, part_names } = QuadMesh::structured_box(lo, hi, nx, ny);
+        let mut cells = Vec::with_capacity(2 * quads.len());
+        for (c, &q) in quads.iter().enumerate() {
+            if (c % nx + c / nx).is_multiple_of(2) {
+                cells.push(PlaneCell::Quad(q));
+            } else {
+                cells.extend(cut_quad(q).map(PlaneCell::Triangle));
+            }
+        }
+        MixedPlaneMesh { nodes, cells, edges, part_names }
+    }
+
+    /// The mesh cut into triangles (quads by [`cut_quad`]: any diagonal
+    /// will do, as a bilinear quad is valid exactly when all four of its
+    /// corner triangles are positive), and the cell each was cut from.
+    pub fn triangles(&self) -> (TriMesh, Vec<usize>) {
+        let (mut cells, mut owner) = (Vec::with_capacity(2 * self.cells.len()), Vec::with_capacity(2 * self.cells.len()));
+        for (c, cell) in self.cells.iter().enumerate() {
+            match *cell {
+                PlaneCell::Triangle(t) => cells.push(t),
+                PlaneCell::Quad(q) => cells.extend(cut_quad(q)),
+            }
+            owner.resize(cells.len(), c);
+        }
+        (TriMesh { nodes: self.nodes.clone(), cells, edges: self.edges.clone(), part_names: self.part_names.clone() }, owner)
     }
 
     /// Turns clockwise cells counter-clockwise, quads and triangles made to
@@ -305,33 +338,67 @@ impl MixedSolidMesh {
     ///   upper corner (Kuhn's cut: every face cut on its diagonal through
     ///   the lower corner, so neighbours agree), boundary squares alike.
     pub fn structured_box(lo: Point3, hi: Point3, n: [usize; 3], kind: Shape) -> Option<MixedSolidMesh> {
-        let HexMesh { mut nodes, cells: hexes, faces: quads, part_names } = HexMesh::structured_box(lo, hi, n);
-        let quad_faces = || quads.iter().map(|f| (f.nodes.to_vec(), f.part)).collect::<Vec<_>>();
-        // the structured box numbers its nodes lexicographically: a
-        // square's smallest node is its lower corner
-        let triangle_faces = |cut: fn(usize) -> bool| {
-            let split = |f: &BoundaryFace| cut_quad(f.nodes).map(|t| (t.to_vec(), f.part)).to_vec();
-            quads.iter().flat_map(|f| if cut(f.part) { split(f) } else { vec![(f.nodes.to_vec(), f.part)] }).collect::<Vec<_>>()
-        };
-        let (cells, faces) = match kind {
-            Shape::Hexahedron => (hexes.iter().map(|&h| SolidCell::Hex(h)).collect(), quad_faces()),
-            Shape::Prism => {
-                let cells = hexes.iter().flat_map(|h| [[h[0], h[1], h[2], h[4], h[5], h[6]], [h[0], h[2], h[3], h[4], h[6], h[7]]].map(SolidCell::Prism)).collect();
-                // the zmin and zmax faces
-                (cells, triangle_faces(|part| part >= 4))
-            }
+        match kind {
+            Shape::Hexahedron => Some(Self::hexes_and_prisms(lo, hi, n, |_, _| false)),
+            Shape::Prism => Some(Self::hexes_and_prisms(lo, hi, n, |_, _| true)),
             Shape::Pyramid => {
+                let HexMesh { mut nodes, cells: hexes, faces, part_names } = HexMesh::structured_box(lo, hi, n);
                 let mut cells = Vec::with_capacity(6 * hexes.len());
                 for h in &hexes {
                     nodes.push(mean_of(&h[..], &nodes));
                     cells.extend(hex_pyramids(*h, nodes.len() - 1).map(SolidCell::Pyramid));
                 }
-                (cells, quad_faces())
+                Some(MixedSolidMesh { nodes, cells, faces: faces.iter().map(|f| (f.nodes.to_vec(), f.part)).collect(), part_names })
             }
-            Shape::Tetrahedron => (hexes.iter().flat_map(kuhn_tets).map(SolidCell::Tet).collect(), triangle_faces(|_| true)),
-            _ => return None,
+            Shape::Tetrahedron => {
+                let HexMesh { nodes, cells: hexes, faces, part_names } = HexMesh::structured_box(lo, hi, n);
+                let cells = hexes.iter().flat_map(kuhn_tets).map(SolidCell::Tet).collect();
+                // the structured box numbers its nodes lexicographically: a
+                // square's smallest node is its lower corner
+                let faces = faces.iter().flat_map(|f| cut_quad(f.nodes).map(|t| (t.to_vec(), f.part))).collect();
+                Some(MixedSolidMesh { nodes, cells, faces, part_names })
+            }
+            _ => None,
+        }
+    }
+
+    /// A structured `n[0] × n[1] × n[2]` brick `[lo, hi]` of hexes and
+    /// prisms in columns along z, the column (i, j) of hexes where i + j
+    /// is even, else of prisms as in [`MixedSolidMesh::structured_box`]:
+    /// each kind meets the other across the quads of its sides.
+    pub fn hex_prism_box(lo: Point3, hi: Point3, n: [usize; 3]) -> MixedSolidMesh {
+        Self::hexes_and_prisms(lo, hi, n, |i, j| (i + j) % 2 == 1)
+    }
+
+    /// [`HexMesh::structured_box`] with the columns (i, j) where `prism`
+    /// holds cut into two prisms each (the bottom square along its
+    /// diagonal from the lower corner, the column's bottom and top faces
+    /// alike).
+    fn hexes_and_prisms(lo: Point3, hi: Point3, n: [usize; 3], prism: impl Fn(usize, usize) -> bool) -> MixedSolidMesh {
+        let HexMesh { nodes, cells: hexes, faces: quads, part_names } = HexMesh::structured_box(lo, hi, n);
+        // the column of a cell or a bottom/top face, by its lower corner
+        let column = |lower: usize| (lower % (n[0] + 1), lower / (n[0] + 1) % (n[1] + 1));
+        let in_prisms = |lower: usize| {
+            let (i, j) = column(lower);
+            prism(i, j)
         };
-        Some(MixedSolidMesh { nodes, cells, faces, part_names })
+        let cells = hexes
+            .iter()
+            .flat_map(|h| if in_prisms(h[0]) { [[h[0], h[1], h[2], h[4], h[5], h[6]], [h[0], h[2], h[3], h[4], h[6], h[7]]].map(SolidCell::Prism).to_vec() } else { vec![SolidCell::Hex(*h)] })
+            .collect();
+        let faces = quads
+            .iter()
+            .flat_map(|f| {
+                let lower = *f.nodes.iter().min().expect("four corners");
+                // the zmin and zmax faces of prism columns are triangles
+                if f.part >= 4 && in_prisms(lower) {
+                    cut_quad(f.nodes).map(|t| (t.to_vec(), f.part)).to_vec()
+                } else {
+                    vec![(f.nodes.to_vec(), f.part)]
+                }
+            })
+            .collect();
+        MixedSolidMesh { nodes, cells, faces, part_names }
     }
 
     /// The mesh as a [`TetMesh`] if all its cells are tetrahedra and its
@@ -402,6 +469,42 @@ mod tests {
         assert_eq!((m.count(Shape::Quadrilateral), m.count(Shape::Triangle)), (1, 2));
     }
 
+    /// The checkerboard box of quads and triangles: positive cells that
+    /// fill it, every inner edge held by two cells (so each kind meets the
+    /// other), and its triangles the same as its cut's where a triangle
+    /// was, quads cut in two there.
+    #[test]
+    fn the_mixed_plane_box_is_conforming_and_cut_into_its_triangles() {
+        use std::collections::HashMap;
+        let (lo, hi) = ([-1.0, 0.5], [2.0, 1.5]);
+        let m = MixedPlaneMesh::structured_box(lo, hi, 3, 2);
+        assert_eq!((m.count(Shape::Quadrilateral), m.count(Shape::Triangle)), (3, 6));
+        let mut area = 0.0;
+        let mut held: HashMap<[usize; 2], usize> = HashMap::new();
+        for c in &m.cells {
+            let v = c.nodes();
+            let a = match *c {
+                PlaneCell::Quad(q) => crate::mesh::linear::polygon_area(&q.map(|n| m.nodes[n])),
+                PlaneCell::Triangle(t) => crate::mesh::linear::polygon_area(&t.map(|n| m.nodes[n])),
+            };
+            assert!(a > 0.0, "{c:?}");
+            area += a;
+            for k in 0..v.len() {
+                let (a, b) = (v[k], v[(k + 1) % v.len()]);
+                *held.entry([a.min(b), a.max(b)]).or_default() += 1;
+            }
+        }
+        assert!((area - 3.0).abs() < 1e-14, "{area}");
+        assert_eq!(held.values().filter(|&&h| h == 1).count(), m.edges.len());
+        assert!(held.values().all(|&h| h <= 2));
+        let (tris, owner) = m.triangles();
+        assert_eq!((tris.cells.len(), owner.len()), (12, 12));
+        for (t, &c) in tris.cells.iter().zip(&owner) {
+            assert!(t.iter().all(|n| m.cells[c].nodes().contains(n)), "{t:?} not of {:?}", m.cells[c]);
+            assert!(crate::mesh::linear::polygon_area(&t.map(|n| m.nodes[n])) > 0.0);
+        }
+    }
+
     /// The corner Jacobians of a prism are the reference prism's (1 at
     /// every vertex), scale with the map, and show a folded corner and a
     /// prism given upside down.
@@ -430,16 +533,22 @@ mod tests {
         use std::collections::HashMap;
         let (lo, hi, n) = ([0.0, -1.0, 2.0], [1.0, 1.5, 2.75], [3, 2, 2]);
         let expected = [(Shape::Tetrahedron, 72), (Shape::Pyramid, 72), (Shape::Prism, 24), (Shape::Hexahedron, 12)];
-        for (kind, count) in expected {
-            let m = MixedSolidMesh::structured_box(lo, hi, n, kind).unwrap();
-            assert_eq!((m.count(kind), m.cells.len()), (count, count), "{kind:?}");
+        let of_one_kind = expected.map(|(kind, count)| (format!("{kind:?}"), MixedSolidMesh::structured_box(lo, hi, n, kind).unwrap(), vec![(kind, count)]));
+        // columns (i, j) of the 3 × 2 base: (0,0) (2,0) (1,1) hexes, the
+        // other three prisms
+        let mixed = ("mixed".to_string(), MixedSolidMesh::hex_prism_box(lo, hi, n), vec![(Shape::Hexahedron, 6), (Shape::Prism, 12)]);
+        for (kind, m, counts) in of_one_kind.into_iter().chain([mixed]) {
+            for &(shape, count) in &counts {
+                assert_eq!(m.count(shape), count, "{kind} {shape:?}");
+            }
+            assert_eq!(m.cells.len(), counts.iter().map(|c| c.1).sum::<usize>(), "{kind}");
             let mut volume = 0.0;
             let mut held: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
             for c in &m.cells {
                 // affine cells: det J is the same at every corner
                 let j = c.corner_jacobians(&m.nodes);
                 assert!(j.iter().all(|&x| x > 0.0 && (x - j[0]).abs() < 1e-12 * j[0]), "{kind:?} {j:?}");
-                volume += j[0] * kind.volume();
+                volume += j[0] * c.shape().volume();
                 for f in c.faces() {
                     let mut key = f.clone();
                     key.sort_unstable();

@@ -1,10 +1,11 @@
 //! Algorithm 1 (`run`) on every element kind: the cases' boxes made of
-//! triangles, tetrahedra, prisms or pyramids (`mesh.elements`), moved
+//! triangles, tetrahedra, prisms or pyramids, or of kinds side by side
+//! (`mesh.elements`), moved
 //! through the P1 system of their triangles or tetrahedra, and on through
 //! Algorithms 2 and 3. The real Gmsh reads every written mesh.
 
 use crate::prisms::{gmsh_agrees, group_off};
-use crate::simplices::gmsh_agrees_simplex;
+use crate::simplices::{gmsh_agrees_kinds, gmsh_agrees_simplex};
 use deformesh::app::case::{AnySetup, Case};
 use deformesh::app::driver::{run_any, Report};
 use std::path::{Path, PathBuf};
@@ -65,12 +66,7 @@ fn the_quarter_ball_runs_on_tetrahedra_and_prisms_as_on_hexes() {
         assert!(report.jf.min > 0.86 && report.jf.max < 1.19, "{kind}: J/f in [{}, {}]", report.jf.min, report.jf.max);
     }
     // both kinds keep the box's nodes first: the same nodes as the hexes'
-    let gap = |cells: &str, kind: &str| {
-        let hex = final_nodes::<3>("quarter_ball.toml", cells, None);
-        let other = final_nodes::<3>("quarter_ball.toml", cells, Some(kind));
-        hex.iter().zip(&other).map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max)
-    };
-    let (coarse, fine) = (gap("[4, 4, 4]", "prism"), gap("[8, 8, 8]", "prism"));
+    let (coarse, fine) = (gap::<3>("quarter_ball.toml", "[4, 4, 4]", "prism"), gap::<3>("quarter_ball.toml", "[8, 8, 8]", "prism"));
     eprintln!("largest distance from the hex run's nodes: {coarse:.3e} at 4³, {fine:.3e} at 8³");
     assert!(fine < 0.5 * coarse && fine < 6e-3, "{coarse:e} at 4³, {fine:e} at 8³");
 }
@@ -108,6 +104,64 @@ fn the_quarter_disk_runs_on_triangles() {
     eprintln!("Gmsh's minDetJac within {det:.1e} of ours, its minSIGE within {sj:.1e}");
     let (off, n) = group_off::<2>(&file, "arc", |x| (x[0].hypot(x[1]) - 1.25).abs());
     assert!(off < 1e-12 && n > 0, "arc nodes {off:e} off");
+}
+
+/// The largest distance between the nodes of two runs of `file` at
+/// `cells`, of `kind` and of the case's quads or hexes (the boxes number
+/// their nodes alike).
+fn gap<const D: usize>(file: &str, cells: &str, kind: &str) -> f64 {
+    let plain = final_nodes::<D>(file, cells, None);
+    let other = final_nodes::<D>(file, cells, Some(kind));
+    plain.iter().zip(&other).map(|(a, b)| (0..D).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max)
+}
+
+/// The quarter disk of quads and triangles side by side (a checkerboard):
+/// valid at order 3 with both kinds, Gmsh agrees on both, the arc nodes
+/// on the arc; and its nodes where the all-quad run puts them, the gap
+/// falling as the box is refined.
+#[test]
+fn the_quarter_disk_runs_on_quads_and_triangles_together() {
+    let edit = |t: String| with_cells(t, "[8, 8]", Some("mixed")) + "\n[highorder]\norder = 3\n";
+    let (report, out, _dir) = run_case("quarter_disk.toml", edit);
+    assert_eq!((report.cells, report.invalid_cells), (32 + 64, 0));
+    assert!(report.boundary_distance_max < 1e-12, "{}", report.boundary_distance_max);
+    let curved = report.highorder.as_ref().expect("order 3");
+    assert!(curved.quality.invalid_elements.is_empty() && curved.quality.min_det_j > 0.0);
+    let file = out.join("mesh.msh");
+    // Gmsh's reference square is [-1, 1]²: its det J is a quarter of ours
+    let (det, _) = gmsh_agrees_kinds::<2>(&file, &[(36, 32, 0.25), (21, 64, 1.0)], 1e-7, None);
+    let (off, n) = group_off::<2>(&file, "arc", |x| (x[0].hypot(x[1]) - 1.25).abs());
+    assert!(off < 1e-12 && n > 0, "arc nodes {off:e} off");
+    let linear = out.join("linear.msh");
+    gmsh_agrees_kinds::<2>(&linear, &[(3, 32, 0.25), (2, 64, 1.0)], 1e-9, None);
+    let (coarse, fine) = (gap::<2>("quarter_disk.toml", "[8, 8]", "mixed"), gap::<2>("quarter_disk.toml", "[16, 16]", "mixed"));
+    eprintln!("Gmsh's minDetJac within {det:.1e} of ours; largest distance from the quad run's nodes: {coarse:.3e} at 8², {fine:.3e} at 16²");
+    // measured: 1.81e-3 at 8², 1.08e-3 at 16²
+    assert!(fine < 0.65 * coarse && fine < 1.2e-3, "{coarse:e} at 8², {fine:e} at 16²");
+}
+
+/// The quarter ball of hexes and prisms in columns side by side: valid,
+/// Gmsh agrees on both kinds (linear and at order 2), sphere and plane
+/// nodes on their surfaces, and the nodes where the all-hex run puts
+/// them, closer as the box is refined.
+#[test]
+fn the_quarter_ball_runs_on_hexes_and_prisms_together() {
+    let edit = |t: String| with_cells(t, "[6, 6, 6]", Some("mixed")) + "\n[highorder]\norder = 2\n";
+    let (report, out, _dir) = run_case("quarter_ball.toml", edit);
+    // 18 columns of 6 hexes, 18 of 12 prisms
+    assert_eq!((report.cells, report.invalid_cells), (108 + 216, 0));
+    assert!(report.boundary_distance_max < 1e-12, "{}", report.boundary_distance_max);
+    let file = out.join("mesh.msh");
+    assert_eq!(gmsh_agrees(&file, &[(12, 108), (13, 216)]), 324);
+    assert_eq!(gmsh_agrees(&out.join("linear.msh"), &[(5, 108), (6, 216)]), 324);
+    let (off, n) = group_off::<3>(&file, "sphere", |x| (x[0].hypot(x[1]).hypot(x[2]) - 1.25).abs());
+    assert!(off < 1e-12 && n > 0, "sphere nodes {off:e} off");
+    let (off, n) = group_off::<3>(&file, "planes", |x| x.iter().fold(f64::INFINITY, |a, &v| a.min(v.abs())));
+    assert!(off == 0.0 && n > 0, "plane nodes {off:e} off");
+    let (coarse, fine) = (gap::<3>("quarter_ball.toml", "[4, 4, 4]", "mixed"), gap::<3>("quarter_ball.toml", "[8, 8, 8]", "mixed"));
+    eprintln!("largest distance from the hex run's nodes: {coarse:.3e} at 4³, {fine:.3e} at 8³");
+    // measured: 1.31e-2 at 4³, 4.69e-3 at 8³
+    assert!(fine < 0.45 * coarse && fine < 5.2e-3, "{coarse:e} at 4³, {fine:e} at 8³");
 }
 
 /// A kind of the other dimension, or none the table has, is refused

@@ -48,7 +48,7 @@ pub(crate) fn gmsh_agrees_simplex<const D: usize>(file: &Path, ty: i64, count: u
 /// each MSH type `ty`, whose det J Gmsh gives as `scale` times ours (a
 /// quarter on quads: its reference square is [-1,1]²); the scaled
 /// Jacobians are compared when `sj` is given.
-fn gmsh_agrees_kinds<const D: usize>(file: &Path, kinds: &[(i64, usize, f64)], rel: f64, sj: Option<f64>) -> (f64, f64) {
+pub(crate) fn gmsh_agrees_kinds<const D: usize>(file: &Path, kinds: &[(i64, usize, f64)], rel: f64, sj: Option<f64>) -> (f64, f64) {
     let g = common::run_checker("check_msh.py", file);
     for &(ty, count, _) in kinds {
         assert_eq!(g["element_types"][ty.to_string()]["count"].as_u64(), Some(count as u64), "{}", g["element_types"]);
