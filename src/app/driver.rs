@@ -83,6 +83,20 @@ pub enum RunError {
     /// What the input file holds cannot all be kept in the output.
     #[error("{0}: nothing was written")]
     Layout(#[from] crate::io::layout::LayoutError),
+    /// New nodes of a periodic slave put at their masters' images leave a
+    /// curved group's shape.
+    #[error(
+        "periodic links: the new nodes of the slave sides, put at the images of their masters' nodes, lie {distance:.3e} off the shape of group `{group}` \
+         (it was {before:.3e}): the two sides of a link are bound to shapes that are not images of each other. Bind them to shapes that are, or leave both out of the geometry file: nothing was written"
+    )]
+    PeriodicOffShape {
+        /// The group.
+        group: String,
+        /// Its nodes' largest distance from its shape after the move.
+        distance: f64,
+        /// Before it.
+        before: f64,
+    },
     /// The CAD model cannot be read, or Gmsh's library is absent.
     #[error(transparent)]
     Cad(#[from] crate::geometry::cad::CadError),
@@ -1036,9 +1050,11 @@ fn main_file<const D: usize>(format: OutputFormat, layout: &crate::io::layout::L
     Ok(text.into_bytes())
 }
 
-/// The curved mesh's nodes put where the layout has them (new periodic
-/// nodes at their masters' images), its elements certified again.
-fn recertify<const D: usize>(c: &mut Curved<D>, layout: &crate::io::layout::Layout) -> Result<(), RunError> {
+/// The curved mesh with new periodic slave nodes moved to the images of
+/// their masters (`layout`'s coordinates): certified again, and its
+/// curved groups measured again, which must stay on their shapes (to the
+/// larger of what they were and 1e-12 of the mesh's extent).
+fn recertify<const D: usize>(c: &mut Curved<D>, layout: &crate::io::layout::Layout, parts: &[BoundaryPart<D>], samples: usize) -> Result<(), RunError> {
     for (x, y) in c.mesh.nodes.iter_mut().zip(&layout.coords) {
         *x = std::array::from_fn(|d| y[d]);
     }
@@ -1049,6 +1065,18 @@ fn recertify<const D: usize>(c: &mut Curved<D>, layout: &crate::io::layout::Layo
     c.quality.min_det_j_attained = q.min_det_j_attained;
     c.quality.max_det_j = q.max_det_j;
     c.quality.scaled_jacobian = q.scaled_jacobian;
+    let errors = crate::highorder::curve::boundary_errors(&c.mesh, parts, samples).map_err(CurveError::from)?;
+    let extent = frame_bounds(std::iter::once(c.mesh.nodes.as_slice()));
+    let extent = (0..D).map(|d| (extent.1[d] - extent.0[d]).powi(2)).sum::<f64>().sqrt();
+    for (group, e) in &errors {
+        let before = c.quality.boundary_error.get(group).map_or(0.0, |b| b.nodes);
+        if e.nodes > before.max(1e-12 * extent) {
+            return Err(RunError::PeriodicOffShape { group: group.clone(), distance: e.nodes, before });
+        }
+    }
+    c.quality.boundary_sample_distance = errors.values().map(|e| e.samples).fold(0.0, f64::max);
+    c.quality.boundary_node_distance = errors.values().map(|e| e.nodes).fold(c.quality.boundary_node_distance, f64::max);
+    c.quality.boundary_error = errors;
     Ok(())
 }
 
@@ -1184,7 +1212,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     c.mesh = c.mesh.to_equispaced();
     let (layout, snapped) = input.curved(&c.mesh, &c.coarse_nodes)?;
     if snapped > 0.0 {
-        recertify(&mut c, &layout)?;
+        recertify(&mut c, &layout, parts, job.options.samples)?;
     }
     // elements of an entity in several groups go into each of them
     for &(k, part) in shared {

@@ -379,9 +379,14 @@ impl Layout {
     /// pairs for every other node of the slave's closure: a side is the
     /// nodes the input paired on it and the corners of its elements;
     /// every node of a sub-element (edge, face) whose corners are all on
-    /// the slave is paired with the master node that the affine map takes
-    /// nearest to it. Returns the link, its map and the pairs whose slave
-    /// is a new node (those the caller may move onto the image).
+    /// the slave is paired with the master node whose place on its
+    /// straight sub-element the affine map takes to the slave node's
+    /// place on its own. Places on the straight sides, not the nodes'
+    /// positions, decide: a slip side moves its new nodes as the flow
+    /// takes them, which need not be as its master's moved (a tetrahedral
+    /// mesh is not symmetric across the period). Returns the link, its
+    /// map and the pairs whose slave is a new node (those the caller puts
+    /// at the image of their master).
     fn carry_periodic(&self, link: &Periodic, of_input: &[usize]) -> Result<(Periodic, [f64; 12], Vec<(usize, usize)>), LayoutError> {
         use std::collections::HashSet;
         let old: Vec<(usize, usize)> = link.pairs.iter().map(|&(s, m)| (of_input[s], of_input[m])).collect();
@@ -393,39 +398,41 @@ impl Layout {
         };
         let slave_side = side(link.slave, &mut old.iter().map(|&(s, _)| s));
         let master_side = side(link.master, &mut old.iter().map(|&(_, m)| m));
-        let closure = |side: &HashSet<usize>| -> Vec<usize> {
-            let mut nodes: Vec<usize> = self.sub_nodes_within(link.dim, side);
-            nodes.extend(side.iter().copied());
-            nodes.sort_unstable();
-            nodes.dedup();
+        // every node of a side with its place on the straight side (the
+        // corners' own positions)
+        let closure = |side: &HashSet<usize>| -> Vec<(usize, [f64; 3])> {
+            let mut nodes = self.straight_places(link.dim, side);
+            nodes.extend(side.iter().map(|&n| (n, self.coords[n])));
+            nodes.sort_by_key(|x| x.0);
+            nodes.dedup_by_key(|x| x.0);
             nodes
         };
         let paired: HashSet<usize> = old.iter().map(|&(s, _)| s).collect();
-        let slaves: Vec<usize> = closure(&slave_side).into_iter().filter(|n| !paired.contains(n)).collect();
+        let slaves: Vec<(usize, [f64; 3])> = closure(&slave_side).into_iter().filter(|n| !paired.contains(&n.0)).collect();
         let masters = closure(&master_side);
-        let images: Vec<[f64; 3]> = masters.iter().map(|&m| apply(&map, self.coords[m])).collect();
+        let images: Vec<[f64; 3]> = masters.iter().map(|&(_, x)| apply(&map, x)).collect();
         let scale = self.extent().max(f64::MIN_POSITIVE);
         let grid = PointGrid::new(&images, scale * PAIR_TOLERANCE);
         let old_nodes: HashSet<usize> = of_input.iter().copied().collect();
         let (mut pairs, mut movable) = (old, Vec::new());
-        for s in slaves {
-            let x = self.coords[s];
-            let (k, miss) = grid.nearest(&images, x);
+        for (s, place) in slaves {
+            let (k, miss) = grid.nearest(&images, place);
             if miss > PAIR_TOLERANCE * scale {
-                return Err(LayoutError::Unpaired { dim: link.dim, slave: link.slave, master: link.master, at: x, miss });
+                return Err(LayoutError::Unpaired { dim: link.dim, slave: link.slave, master: link.master, at: self.coords[s], miss });
             }
-            pairs.push((s, masters[k]));
+            pairs.push((s, masters[k].0));
             if !old_nodes.contains(&s) {
-                movable.push((s, masters[k]));
+                movable.push((s, masters[k].0));
             }
         }
         Ok((Periodic { dim: link.dim, slave: link.slave, master: link.master, affine: link.affine.clone(), pairs }, map, movable))
     }
 
-    /// Nodes of the sub-elements of dimension `dim` (a cell's edges or
-    /// faces, or a boundary element itself) whose corners all lie in
-    /// `side`.
-    fn sub_nodes_within(&self, dim: usize, side: &std::collections::HashSet<usize>) -> Vec<usize> {
+    /// The nodes of the sub-elements of dimension `dim` (a cell's edges
+    /// or faces, or a boundary element itself) whose corners all lie in
+    /// `side`, each with its place on the straight sub-element (its
+    /// lattice point mapped by the corners).
+    fn straight_places(&self, dim: usize, side: &std::collections::HashSet<usize>) -> Vec<(usize, [f64; 3])> {
         let mut out = Vec::new();
         if dim == 0 {
             return out;
@@ -437,7 +444,8 @@ impl Layout {
             for (sub_shape, sub) in sub_elements(el.shape, el.order, dim) {
                 let corners = corner_indices(sub_shape, el.order);
                 if corners.iter().all(|&c| side.contains(&el.nodes[sub[c]])) {
-                    out.extend(sub.iter().map(|&i| el.nodes[i]));
+                    let at: Vec<[f64; 3]> = corners.iter().map(|&c| self.coords[el.nodes[sub[c]]]).collect();
+                    out.extend(sub.iter().enumerate().map(|(k, &i)| (el.nodes[i], straight_place(sub_shape, el.order, k, &at))));
                 }
             }
         }
@@ -455,6 +463,31 @@ impl Layout {
             }
         }
         (0..3).map(|d| (hi[d] - lo[d]).max(0.0).powi(2)).sum::<f64>().sqrt()
+    }
+}
+
+/// Where lattice node `k` of an order-`p` sub-element of `shape` (a
+/// line, triangle or quadrilateral, nodes in its own lattice order) lies
+/// on the straight sub-element with corners `at` ([`corner_indices`]'
+/// order): a corner exactly where it is.
+fn straight_place(shape: Shape, p: usize, k: usize, at: &[[f64; 3]]) -> [f64; 3] {
+    let p_f = p as f64;
+    let mix = |w: &[f64]| std::array::from_fn(|d| w.iter().zip(at).map(|(w, x)| w * x[d]).sum());
+    match shape {
+        Shape::Line => {
+            let t = k as f64 / p_f;
+            mix(&[1.0 - t, t])
+        }
+        Shape::Triangle => {
+            let [i, j, _] = simplex::lattice(Shape::Triangle, p)[k];
+            let (s, t) = (i as f64 / p_f, j as f64 / p_f);
+            mix(&[1.0 - s - t, s, t])
+        }
+        Shape::Quadrilateral => {
+            let (s, t) = ((k % (p + 1)) as f64 / p_f, (k / (p + 1)) as f64 / p_f);
+            mix(&[(1.0 - s) * (1.0 - t), s * (1.0 - t), (1.0 - s) * t, s * t])
+        }
+        _ => at[0],
     }
 }
 
@@ -885,6 +918,36 @@ pub mod tests {
         let err = input.curved(&m, &coarse_nodes).unwrap_err();
         assert!(matches!(err, LayoutError::Lost { shape: Shape::Quadrilateral, .. }), "{err}");
         assert!(err.to_string().contains("its curved cell 1 is a Triangle"), "{err}");
+    }
+
+    /// A sub-element's straight places are its lattice points mapped by
+    /// its corners: on the reference corners, the lattice over p; every
+    /// corner lands exactly on itself.
+    #[test]
+    fn straight_places_are_the_lattice_mapped_by_the_corners() {
+        for shape in [Shape::Line, Shape::Triangle, Shape::Quadrilateral] {
+            for p in 1..=4 {
+                let corners = corner_indices(shape, p);
+                // the corners in corner_indices' order: a quad's in tensor order
+                let at: Vec<[f64; 3]> = match shape {
+                    Shape::Quadrilateral => vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+                    _ => shape.vertices().to_vec(),
+                };
+                let lattice: Vec<[usize; 3]> = match shape {
+                    Shape::Triangle => simplex::lattice(shape, p),
+                    _ => (0..shape.num_nodes(p)).map(|k| [k % (p + 1), k / (p + 1), 0]).collect(),
+                };
+                for (k, m) in lattice.iter().enumerate() {
+                    let x = straight_place(shape, p, k, &at);
+                    let want: [f64; 3] = std::array::from_fn(|d| m[d] as f64 / p as f64);
+                    assert!((0..3).all(|d| (x[d] - want[d]).abs() < 1e-15), "{shape:?} p = {p}, node {k}: {x:?}, want {want:?}");
+                }
+                let skew: Vec<[f64; 3]> = at.iter().map(|x| [x[0] + 0.3 * x[1] + 1.7, 2.0 * x[1] - 0.1, x[0] * x[1] + 5.0]).collect();
+                for (c, &k) in corners.iter().enumerate() {
+                    assert_eq!(straight_place(shape, p, k, &skew), skew[c], "{shape:?} p = {p}, corner {c}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -12,7 +12,10 @@ made by Gmsh as a user would (MSH 4.1), with physical tags that are not
                     bottom 9, fluid 6, a curve group rim 10 (the circle at
                     z = 0) and a point group corner 7
 
-Usage: python kept_meshes.py channel|box OUT.msh
+  --simplices       triangles (channel) or tetrahedra (box) instead: the
+                    box is then not symmetric across its period in z
+
+Usage: python kept_meshes.py channel|box OUT.msh [--simplices]
 """
 import math
 import sys
@@ -20,6 +23,7 @@ import sys
 import gmsh
 
 kind, out = sys.argv[1], sys.argv[2]
+simplices = "--simplices" in sys.argv[3:]
 gmsh.initialize()
 gmsh.option.setNumber("General.Terminal", 0)
 gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
@@ -61,7 +65,7 @@ gmsh.option.setNumber("Mesh.MeshSizeMin", 0.3)
 gmsh.model.mesh.setSize([(0, t) for _, t in gmsh.model.getBoundary([(1, c) for c in wall], combined=False)], 0.15)
 gmsh.option.setNumber("Mesh.Algorithm", 8)
 gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 2)
-gmsh.option.setNumber("Mesh.RecombineAll", 1)
+gmsh.option.setNumber("Mesh.RecombineAll", 0 if simplices else 1)
 if kind == "channel":
     gmsh.model.mesh.setPeriodic(1, outlet, inlet, shift_x)
     gmsh.model.addPhysicalGroup(1, wall, 2, name="wall")
@@ -72,7 +76,8 @@ if kind == "channel":
     gmsh.model.addPhysicalGroup(0, [corner], 7, name="corner")
     gmsh.model.mesh.generate(2)
 else:
-    ex = occ.extrude([(2, s)], 0, 0, 1.0, numElements=[3], recombine=True)
+    # tetrahedra: no layers, Gmsh meshes the volume freely
+    ex = occ.extrude([(2, s)], 0, 0, 1.0) if simplices else occ.extrude([(2, s)], 0, 0, 1.0, numElements=[3], recombine=True)
     occ.synchronize()
     top = [t for d, t in ex if d == 2 and abs(gmsh.model.getBoundingBox(d, t)[2] - 1.0) < 1e-6
            and abs(gmsh.model.getBoundingBox(d, t)[5] - 1.0) < 1e-6][0]
@@ -93,6 +98,7 @@ else:
     gmsh.model.addPhysicalGroup(0, [corner], 7, name="corner")
     gmsh.model.mesh.generate(3)
 types = {t for dim in (2, 3) for t in gmsh.model.mesh.getElements(dim)[0]}
-assert types <= {3, 5}, f"not all quads/hexes: element types {types}"
+want = {2, 4} if simplices else {3, 5}
+assert types <= want, f"not all of element types {want}: {types}"
 gmsh.write(out)
 gmsh.finalize()
