@@ -192,7 +192,7 @@ fn a_periodic_slave_bound_to_another_shape_is_refused() {
         "{CHANNEL}\n[[group]]\nname = \"outlet\"\nkind = \"curve\"\nshape = {{ type = \"circle\", centre = [-9998.0, 0.0], radius = {} }}\n",
         (1e8f64 + 1.0).sqrt()
     );
-    let e = curve(dir.path(), &input, &geometry, 3).err().expect("refused");
+    let Err(e) = curve(dir.path(), &input, &geometry, 3) else { panic!("curved, not refused") };
     let text = e.to_string();
     assert!(matches!(e, RunError::PeriodicOffShape { ref group, distance, .. } if group == "outlet" && distance > 1e-5 && distance < 6e-5), "{text}");
     assert!(text.contains("not images of each other") && text.contains("nothing was written"), "{text}");
