@@ -282,6 +282,11 @@ pub trait Outputs<const D: usize, const N: usize>: Q1Mesh<D, N> + Curvable<D> {
     fn quality(&self) -> MeshQuality;
     /// Per-cell scaled Jacobians.
     fn scaled_jacobians(&self) -> Vec<f64>;
+    /// [`Outputs::quality`] and [`Outputs::scaled_jacobians`] together
+    /// (one certification where both come from it).
+    fn quality_and_scaled_jacobians(&self) -> (MeshQuality, Vec<f64>) {
+        (self.quality(), self.scaled_jacobians())
+    }
     /// Per-cell size at positions `nodes`.
     fn cell_sizes(&self, nodes: &[[f64; D]]) -> Vec<f64>;
     /// The MSH 4.1 text.
@@ -503,7 +508,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
             progress(Progress { algorithm: 1, t: d.t, steps: d.stats.steps, halved: d.stats.halved, iterations: d.stats.last_iterations });
         },
     )?;
-    let quality = def.mesh.quality();
+    let (quality, scaled) = def.mesh.quality_and_scaled_jacobians();
     if !quality.invalid_cells.is_empty() {
         return Err(RunError::Invalid(quality.invalid_cells));
     }
@@ -528,7 +533,6 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     // with high order, mesh.* is the curved mesh and linear.* Algorithm 1's
     let linear = if curved.is_some() { "linear" } else { "mesh" };
     files.push((format!("{linear}.msh"), def.mesh.msh()?.into_bytes()));
-    let scaled = def.mesh.scaled_jacobians();
     let cell_ratios = def.mesh.written_ratios(def.mesh.nodes(), &ratios);
     let vtu = def.mesh.vtu(&[("J/f", &cell_ratios), ("scaled_jacobian", &scaled), ("start_size", &def.mesh.written_sums(&start_sizes))])?;
     files.push((format!("{linear}.vtu"), vtu.into_bytes()));
@@ -921,21 +925,26 @@ where
 {
     const DEFINITIONS: Definitions = M::DEFINITIONS;
     fn quality(&self) -> MeshQuality {
+        self.quality_and_scaled_jacobians().0
+    }
+    fn scaled_jacobians(&self) -> Vec<f64> {
+        self.quality_and_scaled_jacobians().1
+    }
+    /// Both from one certification of the cells at order 1.
+    fn quality_and_scaled_jacobians(&self) -> (MeshQuality, Vec<f64>) {
         let curved = self.mesh().as_curved();
         let (certs, _) = certify_mesh(&curved).expect("order 1 of every kind");
         let sizes = self.written_sums(&self.cell_sizes(self.nodes()));
-        MeshQuality {
+        let scaled: Vec<f64> = certs.iter().map(|c| c.min_scaled_jacobian).collect();
+        let quality = MeshQuality {
             cells: curved.cells.len(),
             nodes: curved.nodes.len(),
             det_j: Range { min: certs.iter().map(|c| c.min_det_lower).fold(f64::INFINITY, f64::min), max: certs.iter().map(|c| c.max_det).fold(f64::NEG_INFINITY, f64::max) },
-            scaled_jacobian: Range::of(certs.iter().map(|c| c.min_scaled_jacobian)),
+            scaled_jacobian: Range::of(scaled.iter().copied()),
             invalid_cells: (0..certs.len()).filter(|&c| !certs[c].valid).collect(),
             cell_size: Range::of(sizes.iter().copied()),
-        }
-    }
-    fn scaled_jacobians(&self) -> Vec<f64> {
-        let (certs, _) = certify_mesh(&self.mesh().as_curved()).expect("order 1 of every kind");
-        certs.iter().map(|c| c.min_scaled_jacobian).collect()
+        };
+        (quality, scaled)
     }
     fn cell_sizes(&self, nodes: &[[f64; D]]) -> Vec<f64> {
         Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| nodes[n]))).collect()
