@@ -357,14 +357,16 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
         .into_par_iter()
         .map(|b| {
             let mut canvas = Canvas::rows(width, height * b / bands..height * (b + 1) / bands);
-            for face in &faces {
+            let mut drawn = Drawn::default();
+            for (f, face) in faces.iter().enumerate() {
                 if !canvas.meets_rows(face.rows.0, face.rows.1) {
                     continue;
                 }
                 for ids in face.pieces.chunks_exact(face.per_piece) {
-                    draw_piece(&mut canvas, plan, face, ids, edges);
+                    draw_piece(&mut canvas, plan, (f, face), ids, edges, &mut drawn);
                 }
             }
+            canvas.paint_owned(|id, x, y| drawn.paint(id as usize, &faces, edges, x, y));
             canvas
         })
         .collect();
@@ -374,15 +376,41 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
     canvas.blit(pixmap, region[0], region[1], SUPERSAMPLE);
 }
 
-/// Rasterises the piece of `face` with grid corners `ids` (3 or 4) as the
-/// fan of triangles from its first corner, shaded and with the face's
-/// border darkened where it passes.
+/// The triangles a band covered, to paint its samples once they are all
+/// drawn: each with its face, corners, light factors and the face border
+/// segments near its piece (a range of `segments`).
+#[derive(Default)]
+struct Drawn {
+    triangles: Vec<(usize, [[f64; 3]; 3], [f64; 3], std::ops::Range<usize>)>,
+    segments: Vec<[[f64; 3]; 2]>,
+}
+
+impl Drawn {
+    /// The colour at (x, y) of triangle `id`: its face's colour shaded by
+    /// the light interpolated there, with the edge line laid over it.
+    fn paint(&self, id: usize, faces: &[Projected], edges: Option<EdgeStyle>, x: f64, y: f64) -> [u8; 3] {
+        let (face, tri, lit, near) = &self.triangles[id];
+        let colour = shade_colour(faces[*face].base, interpolate(tri, *lit, x, y));
+        match edges {
+            Some(style) if !near.is_empty() => {
+                let d = self.segments[near.clone()].iter().map(|[a, b]| distance_to_segment(*a, *b, x, y)).fold(f64::INFINITY, f64::min);
+                edge_blend(colour, style, d)
+            }
+            _ => colour,
+        }
+    }
+}
+
+/// Rasterises the piece of `face` (the `f`-th) with grid corners `ids` (3
+/// or 4) as the fan of triangles from its first corner, into `drawn` to
+/// be shaded and have the face's border darkened where it passes.
 fn draw_piece(
     canvas: &mut Canvas,
     plan: &HexPlan,
-    face: &Projected,
+    (f, face): (usize, &Projected),
     ids: &[usize],
     edges: Option<EdgeStyle>,
+    drawn: &mut Drawn,
 ) {
     let n = ids.len();
     let corners: [[f64; 3]; 4] = std::array::from_fn(|i| face.px[ids[i.min(n - 1)]]);
@@ -391,25 +419,16 @@ fn draw_piece(
         return;
     }
     let light = piece_light(plan, face.patch, ids);
-    let near =
-        edges.map(|style| nearby_segments(&face.border, &corners[..n], style.half_width + 1.0));
+    let start = drawn.segments.len();
+    if let Some(style) = edges {
+        drawn.segments.extend(nearby_segments(&face.border, &corners[..n], style.half_width + 1.0));
+    }
+    let near = start..drawn.segments.len();
     for t in 1..n - 1 {
         let tri = [corners[0], corners[t], corners[t + 1]];
-        let lit = [light[0], light[t], light[t + 1]];
-        let paint = |x: f64, y: f64| {
-            let colour = shade_colour(face.base, interpolate(&tri, lit, x, y));
-            match (edges, &near) {
-                (Some(style), Some(segs)) if !segs.is_empty() => {
-                    let d = segs
-                        .iter()
-                        .map(|[a, b]| distance_to_segment(*a, *b, x, y))
-                        .fold(f64::INFINITY, f64::min);
-                    edge_blend(colour, style, d)
-                }
-                _ => colour,
-            }
-        };
-        canvas.fill_triangle(tri, &paint);
+        let id = u32::try_from(drawn.triangles.len()).expect("fewer than 2^32 triangles in a band");
+        drawn.triangles.push((f, tri, [light[0], light[t], light[t + 1]], near.clone()));
+        canvas.cover_triangle(tri, id);
     }
 }
 

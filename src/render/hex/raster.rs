@@ -25,7 +25,13 @@ pub(crate) struct Canvas {
     top: usize,
     rgb: Vec<[u8; 3]>,
     depth: Vec<f32>,
+    /// Per sample, the triangle [`Canvas::cover_triangle`] last wrote
+    /// ([`NONE`] for none); empty until it is first used.
+    owner: Vec<u32>,
 }
+
+/// No triangle in [`Canvas`]'s `owner`.
+const NONE: u32 = u32::MAX;
 
 impl Canvas {
     /// A blank canvas of `width × height` samples.
@@ -40,7 +46,7 @@ impl Canvas {
     /// canvas drawn whole, sample for sample.
     pub fn rows(width: usize, rows: std::ops::Range<usize>) -> Canvas {
         let n = width * rows.len();
-        Canvas { width, height: rows.len(), top: rows.start, rgb: vec![[255; 3]; n], depth: vec![f32::INFINITY; n] }
+        Canvas { width, height: rows.len(), top: rows.start, rgb: vec![[255; 3]; n], depth: vec![f32::INFINITY; n], owner: Vec::new() }
     }
 
     /// The bands (in order, from the top) as one canvas.
@@ -51,7 +57,7 @@ impl Canvas {
             rgb.extend_from_slice(&b.rgb);
             depth.extend_from_slice(&b.depth);
         }
-        Canvas { width, height: bands.iter().map(|b| b.height).sum(), top: bands.first().map_or(0, |b| b.top), rgb, depth }
+        Canvas { width, height: bands.iter().map(|b| b.height).sum(), top: bands.first().map_or(0, |b| b.top), rgb, depth, owner: Vec::new() }
     }
 
     /// Whether samples with centres from `lo` to `hi` (y) may be in these
@@ -64,7 +70,35 @@ impl Canvas {
     /// the inner side of all three edges (inclusive, so triangles sharing
     /// an edge leave no gap), and is written when its interpolated depth is
     /// nearer than the stored one.
+    #[cfg(test)]
     pub(crate) fn fill_triangle(&mut self, t: [[f64; 3]; 3], paint: &impl Fn(f64, f64) -> [u8; 3]) {
+        self.rasterise(t, |canvas, i, px, py| canvas.rgb[i] = paint(px, py));
+    }
+
+    /// [`Canvas::fill_triangle`] with the painting deferred: the samples
+    /// it wins remember `id`, and [`Canvas::paint_owned`] paints each
+    /// sample once, for the triangle that won it last — the same picture,
+    /// sample for sample, without painting the samples later triangles
+    /// cover again.
+    pub(crate) fn cover_triangle(&mut self, t: [[f64; 3]; 3], id: u32) {
+        if self.owner.is_empty() {
+            self.owner = vec![NONE; self.depth.len()];
+        }
+        self.rasterise(t, |canvas, i, _, _| canvas.owner[i] = id);
+    }
+
+    /// Paints every sample a [`Canvas::cover_triangle`] won with
+    /// `paint(id, x, y)` at its centre.
+    pub(crate) fn paint_owned(&mut self, paint: impl Fn(u32, f64, f64) -> [u8; 3]) {
+        for (i, &id) in self.owner.iter().enumerate().filter(|x| *x.1 != NONE) {
+            let (x, y) = (i % self.width, i / self.width + self.top);
+            self.rgb[i] = paint(id, x as f64 + 0.5, y as f64 + 0.5);
+        }
+    }
+
+    /// The samples of triangle `t` nearer than what they hold: their depth
+    /// stored and `won(self, sample, x, y)` called, in rows from the top.
+    fn rasterise(&mut self, t: [[f64; 3]; 3], mut won: impl FnMut(&mut Canvas, usize, f64, f64)) {
         let area = orient(t[0], t[1], t[2][0], t[2][1]);
         // Seen edge-on (or collapsed): nothing to fill, and dividing by the
         // area would give garbage.
@@ -78,19 +112,26 @@ impl Canvas {
             let py = y as f64 + 0.5;
             for x in xs.clone() {
                 let px = x as f64 + 0.5;
-                let w = [
-                    orient(t[1], t[2], px, py) / area,
-                    orient(t[2], t[0], px, py) / area,
-                    orient(t[0], t[1], px, py) / area,
-                ];
-                if w.iter().any(|&wi| wi < -1e-9) {
+                // each weight tested as soon as it is known: most samples
+                // of the box around a triangle are outside it
+                let w0 = orient(t[1], t[2], px, py) / area;
+                if w0 < -1e-9 {
                     continue;
                 }
+                let w1 = orient(t[2], t[0], px, py) / area;
+                if w1 < -1e-9 {
+                    continue;
+                }
+                let w2 = orient(t[0], t[1], px, py) / area;
+                if w2 < -1e-9 {
+                    continue;
+                }
+                let w = [w0, w1, w2];
                 let depth = (w[0] * t[0][2] + w[1] * t[1][2] + w[2] * t[2][2]) as f32;
                 let i = (y - self.top) * self.width + x;
                 if depth < self.depth[i] {
                     self.depth[i] = depth;
-                    self.rgb[i] = paint(px, py);
+                    won(self, i, px, py);
                 }
             }
         }
