@@ -381,16 +381,24 @@ fn draw_patches(pixmap: &mut Pixmap, plan: &HexPlan, values: &[f64], draw_edges:
 /// segments near its piece (a range of `segments`).
 #[derive(Default)]
 struct Drawn {
-    triangles: Vec<(usize, [[f64; 3]; 3], [f64; 3], std::ops::Range<usize>)>,
+    triangles: Vec<DrawnTriangle>,
     segments: Vec<[[f64; 3]; 2]>,
+}
+
+/// One triangle of [`Drawn`].
+struct DrawnTriangle {
+    face: usize,
+    corners: [[f64; 3]; 3],
+    light: [f64; 3],
+    near: std::ops::Range<usize>,
 }
 
 impl Drawn {
     /// The colour at (x, y) of triangle `id`: its face's colour shaded by
     /// the light interpolated there, with the edge line laid over it.
     fn paint(&self, id: usize, faces: &[Projected], edges: Option<EdgeStyle>, x: f64, y: f64) -> [u8; 3] {
-        let (face, tri, lit, near) = &self.triangles[id];
-        let colour = shade_colour(faces[*face].base, interpolate(tri, *lit, x, y));
+        let DrawnTriangle { face, corners, light, near } = &self.triangles[id];
+        let colour = shade_colour(faces[*face].base, interpolate(corners, *light, x, y));
         match edges {
             Some(style) if !near.is_empty() => {
                 let d = self.segments[near.clone()].iter().map(|[a, b]| distance_to_segment(*a, *b, x, y)).fold(f64::INFINITY, f64::min);
@@ -427,7 +435,7 @@ fn draw_piece(
     for t in 1..n - 1 {
         let tri = [corners[0], corners[t], corners[t + 1]];
         let id = u32::try_from(drawn.triangles.len()).expect("fewer than 2^32 triangles in a band");
-        drawn.triangles.push((f, tri, [light[0], light[t], light[t + 1]], near.clone()));
+        drawn.triangles.push(DrawnTriangle { face: f, corners: tri, light: [light[0], light[t], light[t + 1]], near: near.clone() });
         canvas.cover_triangle(tri, id);
     }
 }
