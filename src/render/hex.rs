@@ -401,7 +401,12 @@ impl Drawn {
         let colour = shade_colour(faces[*face].base, interpolate(corners, *light, x, y));
         match edges {
             Some(style) if !near.is_empty() => {
-                let d = self.segments[near.clone()].iter().map(|[a, b]| distance_to_segment(*a, *b, x, y)).fold(f64::INFINITY, f64::min);
+                // the line reaches `reach` from a segment: one whose box is
+                // farther cannot darken (x, y), nor be the nearest of
+                // those that do
+                let reach = style.half_width + 0.5;
+                let within = |[a, b]: &&[[f64; 3]; 2]| x >= a[0].min(b[0]) - reach && x <= a[0].max(b[0]) + reach && y >= a[1].min(b[1]) - reach && y <= a[1].max(b[1]) + reach;
+                let d = self.segments[near.clone()].iter().filter(within).map(|[a, b]| distance_to_segment(*a, *b, x, y)).fold(f64::INFINITY, f64::min);
                 edge_blend(colour, style, d)
             }
             _ => colour,
