@@ -180,9 +180,9 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for Cut<M, 
 mod tests {
     use super::*;
 
-    /// A quad whose corner off the cut's diagonal is pushed in past the
-    /// diagonal folds, while both its triangles stay positive: the quad
-    /// is caught and both its triangles named.
+    /// A quad whose corner on the cut's diagonal is pushed in past the
+    /// other diagonal folds, while both its triangles stay positive: the
+    /// quad is caught and both its triangles named.
     #[test]
     fn a_folded_quad_is_caught_though_its_triangles_are_positive() {
         let mut cut = CutPlane::new(MixedPlaneMesh::structured_box([0.0; 2], [1.0; 2], 1, 1));

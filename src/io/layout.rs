@@ -128,10 +128,11 @@ pub enum LayoutError {
         /// Why.
         why: String,
     },
-    /// A node on a periodic entity has no image on its master.
+    /// A node on a periodic entity has no image on its master: the two
+    /// sides were not meshed as images of each other.
     #[error(
-        "periodic link of entity {slave} (dimension {dim}) to master {master}: the node at {at:?} on the slave has no node on the master that the affine map takes to it \
-         (nearest {miss:.3e} off): the two sides were curved differently. Leave both sides out of the geometry file (their nodes then stay where they are), or bind them to shapes that are images of each other"
+        "periodic link of entity {slave} (dimension {dim}) to master {master}: the node at {at:?} on the slave (at {place:?} on its straight side) has no node on the master whose place on the straight side the affine map takes to it \
+         (nearest {miss:.3e} off): the two sides were not meshed as images of each other. Mesh them so (Gmsh: `setPeriodic` before meshing)"
     )]
     Unpaired {
         /// The dimension.
@@ -142,7 +143,9 @@ pub enum LayoutError {
         master: i64,
         /// Where the unpaired node is.
         at: [f64; 3],
-        /// How far the nearest candidate is from its image.
+        /// Its place on the straight side, which is paired.
+        place: [f64; 3],
+        /// How far the nearest master's image is from that place.
         miss: f64,
     },
     /// A periodic link without an affine map whose pairs are not a
@@ -158,11 +161,11 @@ pub enum LayoutError {
     },
 }
 
-/// How far, relative to the mesh's extent, a new node of a periodic
-/// slave may be from the image of its master to be taken as its pair
-/// (and put there): CG stops at a relative residual of 1e-7, so the two
-/// sides of a flow agree to about that; curved differently, they are
-/// apart by a fraction of a cell.
+/// How far, relative to the mesh's extent, a slave node's place on its
+/// straight side may be from the image of its master's to be taken as its
+/// pair: the places are exact images up to rounding where the two sides
+/// were meshed as images; otherwise they are apart by a fraction of a
+/// cell.
 pub const PAIR_TOLERANCE: f64 = 1e-6;
 
 /// `x` padded to three coordinates.
@@ -254,9 +257,10 @@ impl Layout {
     }
 
     /// Puts every new slave node exactly at the affine image of its
-    /// master (they were paired within [`PAIR_TOLERANCE`]: the flow's
-    /// solves stop at a residual, so the two sides agree only that far);
-    /// passes repeat so that a master that is itself a slave of another
+    /// master (paired by their places on the straight sides, they are as
+    /// far apart as the flow moved the two sides differently: about 1e-9
+    /// on symmetric sides, a few hundredths of a cell on sliding sides of
+    /// tetrahedra); passes repeat so that a master that is itself a slave of another
     /// link (an edge periodic in two directions) is placed first. Returns
     /// the largest move.
     fn snap_periodic(&mut self, links: &[([f64; 12], Vec<(usize, usize)>)]) -> f64 {
@@ -418,7 +422,7 @@ impl Layout {
         for (s, place) in slaves {
             let (k, miss) = grid.nearest(&images, place);
             if miss > PAIR_TOLERANCE * scale {
-                return Err(LayoutError::Unpaired { dim: link.dim, slave: link.slave, master: link.master, at: self.coords[s], miss });
+                return Err(LayoutError::Unpaired { dim: link.dim, slave: link.slave, master: link.master, at: self.coords[s], place, miss });
             }
             pairs.push((s, masters[k].0));
             if !old_nodes.contains(&s) {
