@@ -934,19 +934,17 @@ where
     }
     /// Both from one certification of the cells at order 1.
     fn quality_and_scaled_jacobians(&self) -> (MeshQuality, Vec<f64>) {
-        let curved = self.mesh().as_curved();
-        let (certs, _) = certify_mesh(&curved).expect("order 1 of every kind");
+        let (certs, q) = certify_mesh(&self.mesh().as_curved()).expect("order 1 of every kind");
         let sizes = self.written_sums(&self.cell_sizes(self.nodes()));
-        let scaled: Vec<f64> = certs.iter().map(|c| c.min_scaled_jacobian).collect();
         let quality = MeshQuality {
-            cells: curved.cells.len(),
-            nodes: curved.nodes.len(),
-            det_j: Range { min: certs.iter().map(|c| c.min_det_lower).fold(f64::INFINITY, f64::min), max: certs.iter().map(|c| c.max_det).fold(f64::NEG_INFINITY, f64::max) },
-            scaled_jacobian: Range::of(scaled.iter().copied()),
-            invalid_cells: (0..certs.len()).filter(|&c| !certs[c].valid).collect(),
+            cells: q.elements,
+            nodes: q.nodes,
+            det_j: Range { min: q.min_det_j, max: q.max_det_j },
+            scaled_jacobian: q.scaled_jacobian,
+            invalid_cells: q.invalid_elements,
             cell_size: Range::of(sizes.iter().copied()),
         };
-        (quality, scaled)
+        (quality, certs.iter().map(|c| c.min_scaled_jacobian).collect())
     }
     fn cell_sizes(&self, nodes: &[[f64; D]]) -> Vec<f64> {
         Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| nodes[n]))).collect()
@@ -1082,8 +1080,7 @@ fn recertify<const D: usize>(c: &mut Curved<D>, layout: &crate::io::layout::Layo
     c.quality.max_det_j = q.max_det_j;
     c.quality.scaled_jacobian = q.scaled_jacobian;
     let after = crate::highorder::curve::boundary_errors(&c.mesh, &walls, samples).map_err(CurveError::from)?;
-    let extent = frame_bounds(std::iter::once(c.mesh.nodes.as_slice()));
-    let allowed = 1e-12 * (0..D).map(|d| (extent.1[d] - extent.0[d]).powi(2)).sum::<f64>().sqrt();
+    let allowed = 1e-12 * layout.extent();
     for (group, e) in &after {
         let was = before.get(group).map_or(0.0, |b| b.nodes);
         if e.nodes > was + allowed {

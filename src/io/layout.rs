@@ -457,7 +457,7 @@ impl Layout {
     }
 
     /// The diagonal of the nodes' bounding box.
-    fn extent(&self) -> f64 {
+    pub(crate) fn extent(&self) -> f64 {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for x in &self.coords {

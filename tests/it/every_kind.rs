@@ -42,6 +42,15 @@ fn with_cells(text: String, cells: &str, elements: Option<&str>) -> String {
     text.replacen(&line, &new, 1)
 }
 
+/// The quarter ball's `sphere` nodes in `file` within 1e-12 of the
+/// sphere r = 1.25, its `planes` nodes exactly on the coordinate planes.
+fn quarter_ball_nodes_on_their_surfaces(file: &Path, kind: &str) {
+    let (off, n) = group_off::<3>(file, "sphere", |x| (x[0].hypot(x[1]).hypot(x[2]) - 1.25).abs());
+    assert!(off < 1e-12 && n > 0, "{kind}: sphere nodes {off:e} off");
+    let (off, n) = group_off::<3>(file, "planes", |x| x.iter().fold(f64::INFINITY, |a, &v| a.min(v.abs())));
+    assert!(off == 0.0 && n > 0, "{kind}: plane nodes {off:e} off");
+}
+
 /// The quarter ball of tetrahedra and of prisms: every cell certified
 /// valid (and by the real Gmsh, also at order 2 after Algorithms 2 and
 /// 3), the sphere and plane nodes on their surfaces, and the nodes where
@@ -49,18 +58,13 @@ fn with_cells(text: String, cells: &str, elements: Option<&str>) -> String {
 /// which falls as the box is refined.
 #[test]
 fn the_quarter_ball_runs_on_tetrahedra_and_prisms_as_on_hexes() {
-    let sphere = |x: [f64; 3]| (x[0].hypot(x[1]).hypot(x[2]) - 1.25).abs();
-    let planes = |x: [f64; 3]| x.iter().fold(f64::INFINITY, |a, &v| a.min(v.abs()));
     for (kind, per_hex, ty) in [("tetrahedron", 6, 4), ("prism", 2, 6)] {
         let (report, out, _dir) = run_case("quarter_ball.toml", |t| with_cells(t, "[6, 6, 6]", Some(kind)));
         assert_eq!((report.cells, report.invalid_cells), (216 * per_hex, 0), "{kind}");
         assert!(report.boundary_distance_max < 1e-12, "{kind}: {}", report.boundary_distance_max);
         let file = out.join("mesh.msh");
         assert_eq!(gmsh_agrees(&file, &[(ty, 216 * per_hex)]), 216 * per_hex);
-        let (off, n) = group_off::<3>(&file, "sphere", sphere);
-        assert!(off < 1e-12 && n > 0, "{kind}: sphere nodes {off:e} off");
-        let (off, n) = group_off::<3>(&file, "planes", planes);
-        assert!(off == 0.0 && n > 0, "{kind}: plane nodes {off:e} off");
+        quarter_ball_nodes_on_their_surfaces(&file, kind);
         // measured: J/f in [0.870, 1.180] on both (the prisms' three
         // tetrahedra are Kuhn's six per box cell, the tetrahedra's)
         assert!(report.jf.min > 0.86 && report.jf.max < 1.19, "{kind}: J/f in [{}, {}]", report.jf.min, report.jf.max);
@@ -154,10 +158,7 @@ fn the_quarter_ball_runs_on_hexes_and_prisms_together() {
     let file = out.join("mesh.msh");
     assert_eq!(gmsh_agrees(&file, &[(12, 108), (13, 216)]), 324);
     assert_eq!(gmsh_agrees(&out.join("linear.msh"), &[(5, 108), (6, 216)]), 324);
-    let (off, n) = group_off::<3>(&file, "sphere", |x| (x[0].hypot(x[1]).hypot(x[2]) - 1.25).abs());
-    assert!(off < 1e-12 && n > 0, "sphere nodes {off:e} off");
-    let (off, n) = group_off::<3>(&file, "planes", |x| x.iter().fold(f64::INFINITY, |a, &v| a.min(v.abs())));
-    assert!(off == 0.0 && n > 0, "plane nodes {off:e} off");
+    quarter_ball_nodes_on_their_surfaces(&file, "mixed");
     let (coarse, fine) = (gap::<3>("quarter_ball.toml", "[4, 4, 4]", "mixed"), gap::<3>("quarter_ball.toml", "[8, 8, 8]", "mixed"));
     eprintln!("largest distance from the hex run's nodes: {coarse:.3e} at 4³, {fine:.3e} at 8³");
     // measured: 1.31e-2 at 4³, 4.69e-3 at 8³
