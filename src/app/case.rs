@@ -662,8 +662,7 @@ impl Case {
         };
         solid.faces.iter_mut().for_each(|f| f.1 = face_part[f.1]);
         solid.part_names = names;
-        if let Some(mut mesh) = solid.to_tet_mesh() {
-            mesh.part_names = solid.part_names;
+        if let Some(mesh) = solid.to_tet_mesh() {
             check(&mut solid_points(&mesh))?;
             return Ok(AnySetup::Tet(Setup { name, mesh, parts, field, options, output, highorder }));
         }
