@@ -4,6 +4,7 @@
 //! itself (node sets, bases, Gmsh and VTK node orders, the tensor order
 //! of the nodes) is in [`crate::mesh::element`], re-exported here.
 
+pub mod blend;
 pub mod curve;
 
 /// The element itself (node sets, bases, node orders) is core data of the

@@ -519,6 +519,19 @@ impl Certifier {
     /// [`certify_with`] with this set-up (the node count is not checked).
     pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
         let (parts, err, s) = self.det_j(ctrl);
+        self.bracket(ctrl, (&parts, err, s), opts)
+    }
+
+    /// [`Certifier::certify`] if [`Certifier::is_valid`], else `None`: one
+    /// det J for both, and no bracket of an invalid element's minimum (the
+    /// costliest to bracket).
+    pub fn certify_if_valid<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Option<Certificate> {
+        let (parts, err, s) = self.det_j(ctrl);
+        (bound_min(&parts.det, D, err, Goal::Sign).0 > 0.0).then(|| self.bracket(ctrl, (&parts, err, s), opts))
+    }
+
+    /// The certificate from det J (`parts`, its rounding bound and scale).
+    fn bracket<const D: usize>(&self, ctrl: &[[f64; D]], (parts, err, s): (&DetParts, f64, f64), opts: &CertifyOptions) -> Certificate {
         let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
         let (lo, up, s1) = bound_min(&parts.det, D, err, goal);
         let (neg_lo, _, s2) = bound_min(&parts.det.neg(), D, err, goal);
@@ -653,6 +666,15 @@ impl ElementCertifier {
             ElementCertifier::Simplex(c) => c.is_valid(ctrl),
             ElementCertifier::Prism(c) => c.is_valid(ctrl),
             ElementCertifier::Pyramid(c) => c.is_valid(ctrl),
+        }
+    }
+
+    /// See [`Certifier::certify_if_valid`] (one det J on quads and hexes;
+    /// the other kinds compute theirs twice).
+    pub fn certify_if_valid<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Option<Certificate> {
+        match self {
+            ElementCertifier::Tensor(c) => c.certify_if_valid(ctrl, opts),
+            _ => self.is_valid(ctrl).then(|| self.certify(ctrl, opts)),
         }
     }
 
