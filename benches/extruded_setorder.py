@@ -39,13 +39,6 @@ gmsh.option.setNumber("Mesh.RecombineAll", 1)
 gmsh.model.mesh.generate(3)
 print({int(t): len(gmsh.model.mesh.getElementsByType(t)[0]) for t in gmsh.model.mesh.getElementTypes(3)})
 gmsh.write(out)
-import time, json, numpy as np
-order = int(sys.argv[4])
-t0 = time.perf_counter(); gmsh.model.mesh.setOrder(order); t = time.perf_counter() - t0
-tags = []
-for ty in gmsh.model.mesh.getElementTypes(3):
-    tags += list(gmsh.model.mesh.getElementsByType(ty)[0])
-dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
-print("@@", json.dumps({"setorder_s": t, "invalid": int((dj <= 0).sum()), "min_minSJ": float(sj.min())}))
+from ogrid import setorder_judged
+setorder_judged(gmsh, int(sys.argv[4]))
 gmsh.finalize()

@@ -16,6 +16,7 @@ import os
 import sys
 
 import gmsh
+from ogrid import ogrid_disk
 
 out = sys.argv[1]
 os.makedirs(out, exist_ok=True)
@@ -76,23 +77,8 @@ def torus(path, around=40, centre=4, ring=3, R=1.0, r=0.5):
     to the circle of radius r (centre x ring quads), revolved about z."""
     start("torus")
     g = gmsh.model.geo
-    h = r / 2.5
     c = g.addPoint(R, 0, 0)
-    sq = [g.addPoint(R + h * math.cos(math.pi / 4 + k * math.pi / 2), 0, h * math.sin(math.pi / 4 + k * math.pi / 2)) for k in range(4)]
-    ci = [g.addPoint(R + r * math.cos(math.pi / 4 + k * math.pi / 2), 0, r * math.sin(math.pi / 4 + k * math.pi / 2)) for k in range(4)]
-    sides = [g.addLine(sq[k], sq[(k + 1) % 4]) for k in range(4)]
-    arcs = [g.addCircleArc(ci[k], c, ci[(k + 1) % 4]) for k in range(4)]
-    spokes = [g.addLine(sq[k], ci[k]) for k in range(4)]
-    faces = [g.addPlaneSurface([g.addCurveLoop(sides)])]
-    for k in range(4):
-        faces.append(g.addPlaneSurface([g.addCurveLoop([spokes[k], arcs[k], -spokes[(k + 1) % 4], -sides[k]])]))
-    for l in sides + arcs:
-        g.mesh.setTransfiniteCurve(l, centre + 1)
-    for l in spokes:
-        g.mesh.setTransfiniteCurve(l, ring + 1)
-    for s in faces:
-        g.mesh.setTransfiniteSurface(s)
-        g.mesh.setRecombine(2, s)
+    faces, _ = ogrid_disk(g, lambda u, v: (R + u, 0, v), c, r / 2.5, r, centre, ring)
     # four quarter turns (Gmsh revolves by less than pi at a time)
     surf, vols, base = [], [], [(2, s) for s in faces]
     for q in range(4):

@@ -6,39 +6,23 @@ The disk: a centre square of N x N quads (half-side 0.25) and four blocks of N x
 circle; extruded along z in LAYERS layers. N = 8, M = 2, LAYERS = 16: 2,048 hexes (the thin-layer
 issue's O-grid cylinder). Groups: wall (the cylinder), bottom, top, fluid.
 Usage: python ogrid_setorder.py N M LAYERS OUT.msh ORDER"""
-import json, math, sys, time
+import sys
 import gmsh
-import numpy as np
+from ogrid import ogrid_disk, setorder_judged
 
 n, m, layers, out, order = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], int(sys.argv[5])
 gmsh.initialize(); gmsh.option.setNumber("General.Terminal", 0)
 gmsh.option.setNumber("Mesh.SaveAll", 0); gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
 g = gmsh.model.geo
-r, a = 0.5, 0.25
 c0 = g.addPoint(0, 0, 0)
-angles = [math.pi / 4 + k * math.pi / 2 for k in range(4)]
-sq = [g.addPoint(a * math.sqrt(2) * math.cos(t), a * math.sqrt(2) * math.sin(t), 0) for t in angles]
-ci = [g.addPoint(r * math.cos(t), r * math.sin(t), 0) for t in angles]
-sides = [g.addLine(sq[k], sq[(k + 1) % 4]) for k in range(4)]
-arcs = [g.addCircleArc(ci[k], c0, ci[(k + 1) % 4]) for k in range(4)]
-radial = [g.addLine(sq[k], ci[k]) for k in range(4)]
-surfaces = [g.addPlaneSurface([g.addCurveLoop(sides)])]
-for k in range(4):
-    surfaces.append(g.addPlaneSurface([g.addCurveLoop([sides[k], radial[(k + 1) % 4], -arcs[k], -radial[k]])]))
-for c in sides + arcs:
-    g.mesh.setTransfiniteCurve(c, n + 1)
-for c in radial:
-    g.mesh.setTransfiniteCurve(c, m + 1)
-for s in surfaces:
-    g.mesh.setTransfiniteSurface(s)
-    g.mesh.setRecombine(2, s)
+surfaces, _ = ogrid_disk(g, lambda u, v: (u, v, 0), c0, 0.25, 0.5, n, m)
 ex = g.extrude([(2, s) for s in surfaces], 0, 0, 1.0, numElements=[layers], recombine=True)
 g.synchronize()
 # extrude returns, per surface: its top, its volume, then its four sides in the order of its loop
 per = [ex[i:i + 6] for i in range(0, len(ex), 6)]
 top = [blk[0][1] for blk in per]
 vols = [blk[1][1] for blk in per]
-walls = [per[k + 1][2 + 2][1] for k in range(4)]  # the outer blocks' third side: -arcs[k]
+walls = [per[k + 1][3][1] for k in range(4)]  # the outer blocks' arc sides (loop position 1)
 gmsh.model.addPhysicalGroup(2, walls, name="wall")
 gmsh.model.addPhysicalGroup(2, surfaces, name="bottom")
 gmsh.model.addPhysicalGroup(2, top, name="top")
@@ -46,11 +30,5 @@ gmsh.model.addPhysicalGroup(3, vols, name="fluid")
 gmsh.model.mesh.generate(3)
 print({int(t): len(gmsh.model.mesh.getElementsByType(t)[0]) for t in gmsh.model.mesh.getElementTypes(3)})
 gmsh.write(out)
-t0 = time.perf_counter(); gmsh.model.mesh.setOrder(order); t = time.perf_counter() - t0
-tags = []
-for ty in gmsh.model.mesh.getElementTypes(3):
-    tags += list(gmsh.model.mesh.getElementsByType(ty)[0])
-dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
-sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
-print("@@", json.dumps({"setorder_s": t, "invalid": int((dj <= 0).sum()), "min_minSJ": float(sj.min())}))
+setorder_judged(gmsh, order)
 gmsh.finalize()
