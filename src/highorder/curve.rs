@@ -1432,9 +1432,11 @@ where
             why = format!("at {places} places, {} of the {} elements it moves are not certified valid, the first element {c}", invalid.len(), touched.len());
             continue;
         }
-        // the straight elements' scaled Jacobians are those of their
-        // order-1 elements
-        let sampled = |c: usize| linear.certify(&straight, c, &quick).unwrap_or_else(|| certifiers.of(straight.cell_shape(c)).certify(&straight.cell_coords(c), &quick));
+        // the straight elements' certificates are those of their order-1
+        // elements, bracketed: without splits a valid trilinear hex can
+        // come out not valid, and would escape the rule below
+        let exact = CertifyOptions::default();
+        let sampled = |c: usize| linear.certify(&straight, c, &exact).unwrap_or_else(|| certifiers.of(straight.cell_shape(c)).certify(&straight.cell_coords(c), &exact));
         let pairs: Vec<(Certificate, Certificate)> = touched.par_iter().zip(fresh).map(|(&c, now)| (sampled(c), now.expect("checked valid"))).collect();
         let lost: Vec<(usize, f64, f64)> = touched
             .iter()
