@@ -40,11 +40,12 @@ struct Recipe {
 
 /// Moves the nodes inside the elements of `mesh` that the boundary snap
 /// moved (`nodes` against `before`) by the blend of their element's
-/// edges and faces (module docs). `mesh`'s own nodes are not read.
-pub fn blend_into_elements<const D: usize>(mesh: &CurvedMesh<D>, before: &[[f64; D]], nodes: &mut [[f64; D]]) -> Result<(), HighOrderError> {
+/// edges and faces (module docs); returns those elements, in order (the
+/// blend moves no node outside them). `mesh`'s own nodes are not read.
+pub fn blend_into_elements<const D: usize>(mesh: &CurvedMesh<D>, before: &[[f64; D]], nodes: &mut [[f64; D]]) -> Result<Vec<usize>, HighOrderError> {
     let touched: Vec<usize> = (0..mesh.cells.len()).filter(|&c| mesh.cells[c].iter().any(|&n| nodes[n] != before[n])).collect();
     if touched.is_empty() {
-        return Ok(());
+        return Ok(touched);
     }
     let kept = kept_nodes(mesh, nodes);
     let mut recipes = BTreeMap::new();
@@ -67,7 +68,7 @@ pub fn blend_into_elements<const D: usize>(mesh: &CurvedMesh<D>, before: &[[f64;
             }
         }
     }
-    Ok(())
+    Ok(touched)
 }
 
 /// The nodes of boundary facets that are not planar in `nodes` (3D): on a

@@ -604,21 +604,7 @@ pub struct Curved<const D: usize> {
 /// Certifies every element; returns the certificates and the summary
 /// without the boundary figures.
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
-    let certifiers = Certifiers::new(&mesh.shapes(), mesh.p, mesh.spacing)?;
-    let certs: Vec<Certificate> = (0..mesh.cells.len())
-        .into_par_iter()
-        .map(|c| {
-            let ctrl = mesh.cell_coords(c);
-            let shape = mesh.cell_shape(c);
-            let per_cell = shape.num_nodes(mesh.p);
-            if ctrl.len() != per_cell {
-                return Err(HighOrderError::NodeCount { order: mesh.p, dim: D, expected: per_cell, found: ctrl.len() });
-            }
-            Ok(certifiers.of(shape).certify(&ctrl, &CertifyOptions::default()))
-        })
-        .collect::<Result<_, HighOrderError>>()?;
-    let q = summary(mesh, &certs);
-    Ok((certs, q))
+    certify_cells(mesh, None, &BTreeMap::new())
 }
 
 /// [`certify_mesh`], where the certificates of `known` are taken as they
@@ -630,6 +616,12 @@ pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certifi
 /// every other element's. Pyramids are certified at order p: their
 /// order-1 map is rational.
 pub fn certify_mesh_straight<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64; D]], known: &BTreeMap<usize, Certificate>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
+    certify_cells(mesh, Some(straight), known)
+}
+
+/// [`certify_mesh`] and [`certify_mesh_straight`] (no element straight
+/// without `straight`).
+fn certify_cells<const D: usize>(mesh: &CurvedMesh<D>, straight: Option<&[[f64; D]]>, known: &BTreeMap<usize, Certificate>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
     let certifiers = Certifiers::new(&mesh.shapes(), mesh.p, mesh.spacing)?;
     let linear = Linear::new(mesh)?;
     let certs: Vec<Certificate> = (0..mesh.cells.len())
@@ -644,8 +636,10 @@ pub fn certify_mesh_straight<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[
                 return Err(HighOrderError::NodeCount { order: mesh.p, dim: D, expected: shape.num_nodes(mesh.p), found: cell.len() });
             }
             let opts = CertifyOptions::default();
-            let as_linear = if cell.iter().all(|&n| mesh.nodes[n] == straight[n]) { linear.certify(mesh, c, &opts) } else { None };
-            Ok(as_linear.unwrap_or_else(|| certifiers.of(shape).certify(&mesh.cell_coords(c), &opts)))
+            match straight {
+                Some(straight) if cell.iter().all(|&n| mesh.nodes[n] == straight[n]) => Ok(linear.certify(&certifiers, mesh, c, &opts)),
+                _ => Ok(certifiers.of(shape).certify(&mesh.cell_coords(c), &opts)),
+            }
         })
         .collect::<Result<_, HighOrderError>>()?;
     tracing::debug!("certified {} elements ({} known, {} splits)", certs.len(), known.len(), certs.iter().map(|c| c.splits).sum::<usize>());
@@ -668,29 +662,23 @@ struct Linear {
 
 impl Linear {
     fn new<const D: usize>(mesh: &CurvedMesh<D>) -> Result<Self, HighOrderError> {
-        use crate::mesh::element::{prism, simplex};
-        let p = mesh.p;
-        let corners = |shape: Shape| match shape {
-            Shape::Quadrilateral | Shape::Hexahedron => {
-                let dim = shape.dim();
-                Some((0..1usize << dim).map(|a| (0..dim).map(|s| (a >> s & 1) * p * (p + 1).pow(s as u32)).sum()).collect())
-            }
-            Shape::Triangle | Shape::Tetrahedron => Some(simplex::vertex_nodes(shape, p)),
-            Shape::Prism => Some(prism::vertex_nodes(p).to_vec()),
-            _ => None,
-        };
         let shapes = mesh.shapes();
-        Ok(Linear { certifiers: Certifiers::new(&shapes, 1, mesh.spacing)?, corners: shapes.iter().map(|&s| (s, corners(s))).collect(), samples: 3 * p + 1 })
+        let corners = |s: Shape| (s != Shape::Pyramid).then(|| crate::mesh::element::corner_indices(s, mesh.p));
+        Ok(Linear { certifiers: Certifiers::new(&shapes, 1, mesh.spacing)?, corners: shapes.iter().map(|&s| (s, corners(s))).collect(), samples: 3 * mesh.p + 1 })
     }
 
     /// Cell `c`'s certificate as an order-1 element (its other nodes are
-    /// taken to be straight), sampled on the order-p grid; `None` for a
-    /// pyramid.
-    fn certify<const D: usize>(&self, mesh: &CurvedMesh<D>, c: usize, opts: &CertifyOptions) -> Option<Certificate> {
+    /// taken to be straight), sampled on the order-p grid; a pyramid's by
+    /// `order_p`, the order-p certifiers.
+    fn certify<const D: usize>(&self, order_p: &Certifiers, mesh: &CurvedMesh<D>, c: usize, opts: &CertifyOptions) -> Certificate {
         let shape = mesh.cell_shape(c);
-        let at = self.corners[&shape].as_ref()?;
-        let ctrl: Vec<[f64; D]> = at.iter().map(|&a| mesh.nodes[mesh.cells[c][a]]).collect();
-        Some(self.certifiers.of(shape).certify(&ctrl, &CertifyOptions { samples: self.samples, ..*opts }))
+        match &self.corners[&shape] {
+            Some(at) => {
+                let ctrl: Vec<[f64; D]> = at.iter().map(|&a| mesh.nodes[mesh.cells[c][a]]).collect();
+                self.certifiers.of(shape).certify(&ctrl, &CertifyOptions { samples: self.samples, ..*opts })
+            }
+            None => order_p.of(shape).certify(&mesh.cell_coords(c), opts),
+        }
     }
 }
 
@@ -1409,11 +1397,10 @@ where
             plan.places.fill(Settle::Arc);
         }
         let (mut nodes, moved_distance) = snapped_nodes(sub, parts, &straight.nodes, plan)?;
-        super::blend::blend_into_elements(&straight, &straight.nodes, &mut nodes)?;
+        let touched = super::blend::blend_into_elements(&straight, &straight.nodes, &mut nodes)?;
         let largest_move = largest_distance(&nodes, &straight.nodes);
         let snapped = CurvedMesh { nodes, ..straight.clone() };
         let t0 = Instant::now();
-        let touched = moved_cells(&snapped, &straight.nodes);
         let places = if fitted { "fitted" } else { "equal arc length" };
         // validity first, by the sign alone: bracketing the minimum of an
         // element the snap inverted costs the most splits (measured: 8 s
@@ -1436,7 +1423,7 @@ where
         // elements, bracketed: without splits a valid trilinear hex can
         // come out not valid, and would escape the rule below
         let exact = CertifyOptions::default();
-        let sampled = |c: usize| linear.certify(&straight, c, &exact).unwrap_or_else(|| certifiers.of(straight.cell_shape(c)).certify(&straight.cell_coords(c), &exact));
+        let sampled = |c: usize| linear.certify(&certifiers, &straight, c, &exact);
         let pairs: Vec<(Certificate, Certificate)> = touched.par_iter().zip(fresh).map(|(&c, now)| (sampled(c), now.expect("checked valid"))).collect();
         let lost: Vec<(usize, f64, f64)> = touched
             .iter()

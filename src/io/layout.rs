@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use thiserror::Error;
 
-use crate::mesh::element::{prism, pyramid, simplex};
+use crate::mesh::element::{corner_indices, prism, pyramid, simplex};
 use crate::mesh::CurvedMesh;
 
 /// Name of the physical group that holds all cells of a mesh the crate
@@ -560,23 +560,6 @@ fn on_input_curves(elements: &[Element], entity: &mut [Option<(usize, i64)>], of
             }
         }
     }
-}
-
-/// Local indices of the corners of an element of order `p`: tensor order
-/// of the corners for a tensor element, the vertices in the shape's order
-/// for a simplex.
-fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
-    let d = shape.dim();
-    if shape == Shape::Prism {
-        return prism::vertex_nodes(p).to_vec();
-    }
-    if shape == Shape::Pyramid {
-        return pyramid::vertex_nodes(p).to_vec();
-    }
-    if shape.is_simplex() && d >= 2 {
-        return simplex::vertex_nodes(shape, p);
-    }
-    (0..1usize << d).map(|bits| (0..d).map(|k| ((bits >> k) & 1) * p * (p + 1).pow(k as u32)).sum()).collect()
 }
 
 /// Every sub-element of dimension `dim` of an element of order `p` (its

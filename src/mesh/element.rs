@@ -99,6 +99,23 @@ pub(crate) fn check_nodes(p: usize, dim: usize, len: usize) -> Result<(), HighOr
     }
 }
 
+/// Local indices of the corners of an element of order `p`: tensor order
+/// of the corners for a tensor element, the vertices in the shape's order
+/// for a simplex.
+pub fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
+    let d = shape.dim();
+    if shape == Shape::Prism {
+        return prism::vertex_nodes(p).to_vec();
+    }
+    if shape == Shape::Pyramid {
+        return pyramid::vertex_nodes(p).to_vec();
+    }
+    if shape.is_simplex() && d >= 2 {
+        return simplex::vertex_nodes(shape, p);
+    }
+    (0..1usize << d).map(|bits| (0..d).map(|k| ((bits >> k) & 1) * p * (p + 1).pow(k as u32)).sum()).collect()
+}
+
 /// The `p + 1` node positions in `[0,1]`, increasing, for `p` in
 /// `1..=MAX_ORDER`. Both sets contain 0 and 1 and are symmetric about ½
 /// (`t[p - i] = 1 - t[i]`, exactly), which the writers rely on when they
