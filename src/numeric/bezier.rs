@@ -253,6 +253,32 @@ impl Bezier {
         self.coef.iter().fold(0.0f64, |m, c| m.max(c.abs()))
     }
 
+    /// Per variable, a bound on how far the polynomial can fall below the
+    /// control net along that variable: `⌊n/2⌋⌈n/2⌉/(2n) · max |Δ²c|` over
+    /// the lines of coefficients in that direction (0 for degree < 2). The
+    /// gap between the smallest coefficient and the minimum is at most
+    /// their sum, and halving the box in a variable quarters its term: the
+    /// branch and bound splits only where a term is large. An extruded
+    /// hex's det J is constant along the extrusion, and halving that
+    /// variable only copied boxes.
+    pub fn net_gaps(&self) -> [f64; 3] {
+        std::array::from_fn(|d| {
+            let n = self.deg[d];
+            if n < 2 {
+                return 0.0;
+            }
+            let step: usize = (0..d).map(|e| self.len(e)).product();
+            let mut worst = 0.0f64;
+            for (i, &c) in self.coef.iter().enumerate() {
+                // i is the first of three along d when its index in d is ≤ n − 2
+                if (i / step) % (n + 1) + 2 <= n {
+                    worst = worst.max((c - 2.0 * self.coef[i + step] + self.coef[i + 2 * step]).abs());
+                }
+            }
+            (n / 2 * n.div_ceil(2)) as f64 / (2 * n) as f64 * worst
+        })
+    }
+
     /// The smallest corner coefficient, a value the polynomial takes.
     pub fn min_corner(&self) -> f64 {
         let mut m = f64::INFINITY;
@@ -271,6 +297,42 @@ mod tests {
     /// A polynomial of degree (3, 2, 1) with awkward coefficients.
     fn sample() -> Bezier {
         Bezier { deg: [3, 2, 1], coef: (0..24).map(|i| ((i * 7 % 11) as f64 - 4.5) / 3.0).collect() }
+    }
+
+    /// `(u − ½)²` has coefficients ¼, −¼, ¼: its minimum 0 lies exactly
+    /// the gap ¼ above the smallest coefficient. On polynomials of mixed
+    /// degree the value at the Greville point of the smallest coefficient
+    /// is within the gaps' sum of it, and a halving quarters its own gap.
+    #[test]
+    fn net_gaps_bound_the_fall_below_the_net() {
+        let q = Bezier { deg: [0, 2, 0], coef: [0.25, -0.25, 0.25].into_iter().collect() };
+        assert_eq!(q.net_gaps(), [0.0, 0.25, 0.0]);
+        assert_eq!(q.eval([0.0, 0.5, 0.0]), q.coef_bounds().0 + 0.25);
+        let mut seed = 7u64;
+        for deg in [[3, 2, 1], [4, 4, 2], [2, 5, 3]] {
+            let len = (deg[0] + 1) * (deg[1] + 1) * (deg[2] + 1);
+            let b = Bezier {
+                deg,
+                coef: (0..len)
+                    .map(|_| {
+                        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+                    })
+                    .collect(),
+            };
+            let gaps = b.net_gaps();
+            let (lo, _) = b.coef_bounds();
+            let at = b.coef.iter().position(|&c| c == lo).unwrap();
+            let idx = [at % (deg[0] + 1), at / (deg[0] + 1) % (deg[1] + 1), at / ((deg[0] + 1) * (deg[1] + 1))];
+            let greville: [f64; 3] = std::array::from_fn(|d| if deg[d] == 0 { 0.0 } else { idx[d] as f64 / deg[d] as f64 });
+            assert!(b.eval(greville) <= lo + gaps.iter().sum::<f64>() + 1e-14, "{deg:?}");
+            for d in 0..3 {
+                let (l, r) = b.split(d);
+                for h in [l, r] {
+                    assert!(h.net_gaps()[d] <= gaps[d] / 4.0 + 1e-15, "{deg:?} {d}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -21,6 +21,7 @@
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+use smallvec::SmallVec;
 use std::sync::OnceLock;
 
 use rayon::prelude::*;
@@ -378,6 +379,9 @@ struct BoxItem {
     poly: Bezier,
     /// How many times it was split from the whole element.
     depth: usize,
+    /// How many halvings in one variable made it (`dim · depth` when
+    /// every split halves every variable): each adds a rounding bound.
+    cuts: usize,
 }
 
 impl PartialEq for BoxItem {
@@ -414,14 +418,14 @@ pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64
         return (f64::NEG_INFINITY, f64::INFINITY, 0);
     }
     let scale = poly.max_abs();
-    // A split applies, per variable, rows of non-negative weights summing
-    // to one (binomial / 2^k, exact): at most n + 2 roundings on terms
-    // whose absolute values sum to at most the largest coefficient plus
-    // its error. So each level adds at most this to a box's error.
+    // A halving in one variable applies rows of non-negative weights
+    // summing to one (binomial / 2^k, exact): at most n + 2 roundings on
+    // terms whose absolute values sum to at most the largest coefficient
+    // plus its error. So each cut adds at most this to a box's error.
     let n = poly.deg.iter().max().copied().unwrap_or(0);
-    let per_level = dim as f64 * gamma(n + 2) * (scale + 2.0 * err);
+    let per_cut = gamma(n + 2) * (scale + 2.0 * err);
     // the sign test compares with the error of the deepest box allowed
-    let margin = err + MAX_SUBDIVISION_DEPTH as f64 * per_level;
+    let margin = err + (dim * MAX_SUBDIVISION_DEPTH) as f64 * per_cut;
     // The floor keeps a minimum of exactly 0 from asking for infinite
     // relative precision.
     let settled = |lower: f64, upper: f64| match goal {
@@ -435,7 +439,7 @@ pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64
     };
     let (mut splits, mut deepest) = (0, 0);
     let result = |lower: f64, upper: f64, splits: usize, deepest: usize| {
-        let e = if let Goal::Sign = goal { margin } else { err + deepest as f64 * per_level };
+        let e = if let Goal::Sign = goal { margin } else { err + deepest as f64 * per_cut };
         (lower - e, upper + e, splits)
     };
     let mut upper = poly.min_corner();
@@ -446,13 +450,15 @@ pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64
         return result(lower, upper, 0, 0);
     }
     let mut heap = BinaryHeap::new();
-    let mut top = BoxItem { lower, poly: poly.clone(), depth: 0 };
+    let mut top = BoxItem { lower, poly: poly.clone(), depth: 0, cuts: 0 };
     loop {
         splits += 1;
         let depth = top.depth + 1;
-        deepest = deepest.max(depth);
+        let dirs = split_directions(&top.poly, dim, goal);
+        let cuts = top.cuts + dirs.len();
+        deepest = deepest.max(cuts);
         let mut parts = vec![top.poly];
-        for d in 0..dim {
+        for &d in &dirs {
             parts = parts
                 .into_iter()
                 .flat_map(|b| {
@@ -469,7 +475,7 @@ pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64
             if settled(lower, upper) {
                 pruned = pruned.min(lower);
             } else {
-                heap.push(BoxItem { lower, poly: b, depth });
+                heap.push(BoxItem { lower, poly: b, depth, cuts });
             }
         }
         match heap.pop() {
@@ -481,6 +487,25 @@ pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64
             return result(top.lower.min(pruned), upper, splits, deepest);
         }
     }
+}
+
+/// The variables [`bound_min`] halves a box in. The sign test halves all
+/// (its depth limit is in halvings of the whole box). The bracket halves
+/// those whose [`Bezier::net_gaps`] term is within 4× of the largest: one
+/// halving quarters a term, so the others would not yet be the largest;
+/// all of them if every term is 0 (a multilinear net, settled by its
+/// corners unless rounding keeps it open).
+fn split_directions(poly: &Bezier, dim: usize, goal: Goal) -> SmallVec<[usize; 3]> {
+    let all = || (0..dim).collect();
+    if let Goal::Sign = goal {
+        return all();
+    }
+    let gaps = poly.net_gaps();
+    let top = gaps[..dim].iter().copied().fold(0.0f64, f64::max);
+    if !(top > 0.0) {
+        return all();
+    }
+    (0..dim).filter(|&d| gaps[d] >= 0.25 * top).collect()
 }
 
 /// The certificate's set-up for one order and node spacing, made once per
@@ -932,12 +957,14 @@ mod tests {
             let cf = cert(&small.iter().map(|c| c.map(|x| x + 1e6)).collect());
             assert!(cf.min_det_lower <= cf.min_det_upper, "{cf:?}");
 
-            // the hex's search splits the w direction too, in which det J
-            // is constant: it may end undecided within the split budget;
-            // its bracket must agree with the quad's, wherever it lies
+            // det J is constant along w: the search halves only u and v,
+            // so the hex gets the quad's verdict in as many splits (halving
+            // w too, it ran out of its 4000 undecided)
             let h = extruded(q);
             let ch = certify(2, Spacing::Equispaced, &h).unwrap();
             assert!(ch.min_det_lower <= base.min_det_upper && ch.min_det_upper >= base.min_det_lower, "{ch:?} {base:?}");
+            assert_eq!(ch.valid, base.valid, "{ch:?} {base:?}");
+            assert!(ch.splits <= 2 * base.splits, "{} vs {}", ch.splits, base.splits);
             let hm: Vec<[f64; 3]> = h.iter().map(|c| c.map(|x| x + 1e6)).collect();
             assert_eq!(certify(2, Spacing::Equispaced, &hm).unwrap(), ch);
             let hs: Vec<[f64; 3]> = h.iter().map(|c| c.map(|x| x * 1e-6)).collect();
