@@ -310,6 +310,30 @@ impl Default for CertifyOptions {
     }
 }
 
+impl CertifyOptions {
+    /// Each element's bracket when a whole mesh is certified: to 1e-3 of
+    /// its minimum, then [`extreme_candidates`] alone to the default 1e-7.
+    /// The extra digits on every element cost most of the splits
+    /// (measured on the 1e-5 extruded layer at p = 3: 178,173 splits
+    /// against 21,962, certification 11.4 s against 4.7 s).
+    pub fn element() -> Self {
+        CertifyOptions { rel_tol: 1e-3, ..Default::default() }
+    }
+}
+
+/// The elements of a mesh, given their `certs`, that may hold its least
+/// or its largest det J: those whose lower bound of the minimum is at
+/// most the least value attained on any element, or whose upper bound of
+/// the maximum is at least the largest attained. Bracketing these alone
+/// to a tolerance brackets the mesh's extremes to it: every other element
+/// has its minimum above a value some candidate attains, and the
+/// candidate's new bracket is within the tolerance of that value or below.
+pub fn extreme_candidates(certs: &[Certificate]) -> Vec<usize> {
+    let least = certs.iter().map(|c| c.min_det_upper).fold(f64::INFINITY, f64::min);
+    let most = certs.iter().map(|c| c.max_det_attained).fold(f64::NEG_INFINITY, f64::max);
+    (0..certs.len()).filter(|&e| certs[e].min_det_lower <= least || certs[e].max_det >= most).collect()
+}
+
 /// What [`certify`] finds about one element. Determinants are of the map
 /// from `[0,1]^d` (Gmsh's `[-1,1]^d` values are these divided by `2^d`);
 /// for simplices from the unit simplex (Gmsh's own), for prisms from the
@@ -331,6 +355,9 @@ pub struct Certificate {
     pub min_det_upper: f64,
     /// A certified upper bound of `max det J`, tight like the minimum.
     pub max_det: f64,
+    /// A value `det J` takes on the element near its maximum, so a lower
+    /// bound of the true maximum: it lies in `[max_det_attained, max_det]`.
+    pub max_det_attained: f64,
     /// `min det J` over the sampling grid (`samples` equispaced points per
     /// direction, end points included; for equispaced elements with the
     /// default `3p + 1` it contains the nodes).
@@ -345,16 +372,17 @@ pub struct Certificate {
 impl Certificate {
     /// The certificate of a normalised element in `dim` dimensions scaled
     /// by `s` ([`normalise`]): from the bracket `(lo, up)` of its min det J,
-    /// the lower bound `neg_lo` of −det J, the sampled `(min det J, min
+    /// the bracket `(neg_lo, neg_up)` of the min of −det J, the sampled `(min det J, min
     /// scaled Jacobian)` and the splits used. `s` is a power of two:
     /// scaling back is exact (unless the true value under- or overflows).
-    pub(crate) fn of_normalised(dim: usize, s: f64, (lo, up, neg_lo): (f64, f64, f64), (min_det, min_sj): (f64, f64), splits: usize) -> Certificate {
+    pub(crate) fn of_normalised(dim: usize, s: f64, (lo, up): (f64, f64), (neg_lo, neg_up): (f64, f64), (min_det, min_sj): (f64, f64), splits: usize) -> Certificate {
         let unit = |x: f64| (0..dim).fold(x, |v, _| v * s);
         Certificate {
             valid: lo > 0.0,
             min_det_lower: unit(lo),
             min_det_upper: unit(up.min(min_det)),
             max_det: unit(-neg_lo),
+            max_det_attained: unit(-neg_up),
             min_det_sampled: unit(min_det),
             min_scaled_jacobian: min_sj,
             splits,
@@ -559,7 +587,7 @@ impl Certifier {
     fn bracket<const D: usize>(&self, ctrl: &[[f64; D]], (parts, err, s): (&DetParts, f64, f64), opts: &CertifyOptions) -> Certificate {
         let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
         let (lo, up, s1) = bound_min(&parts.det, D, err, goal);
-        let (neg_lo, _, s2) = bound_min(&parts.det.neg(), D, err, goal);
+        let (neg_lo, neg_up, s2) = bound_min(&parts.det.neg(), D, err, goal);
         let (centre, _) = normalise(ctrl);
         let moved: Vec<[f64; D]> = ctrl.iter().map(|c| std::array::from_fn(|r| (c[r] - centre[r]) / s)).collect();
         let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
@@ -568,7 +596,7 @@ impl Certifier {
             min_det = min_det.min(crate::mesh::element::basis::det(&j));
             min_sj = min_sj.min(scaled_det(&j));
         }
-        Certificate::of_normalised(D, s, (lo, up, neg_lo), (min_det, min_sj), s1 + s2)
+        Certificate::of_normalised(D, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
     }
 }
 

@@ -451,7 +451,7 @@ impl PrismCertifier {
         let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
         let (lo, up, s1) = self.bound_min(&parts.det, err, goal);
         let neg: Coef = parts.det.iter().map(|c| -c).collect();
-        let (neg_lo, _, s2) = self.bound_min(&neg, err, goal);
+        let (neg_lo, neg_up, s2) = self.bound_min(&neg, err, goal);
         let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
         let (min_det, min_sj) = match constant_jacobian(&parts.col, parts.deriv_max) {
             // a straight-sided prism: its J, hence both figures, is the
@@ -460,7 +460,7 @@ impl PrismCertifier {
             None if m == self.samples.m => self.sample(&parts.col, &self.samples),
             None => self.sample(&parts.col, &Samples::new(self.p, m)),
         };
-        Certificate::of_normalised(3, s, (lo, up, neg_lo), (min_det, min_sj), s1 + s2)
+        Certificate::of_normalised(3, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
     }
 
     /// `(min det J, min scaled Jacobian)` of the normalised element over

@@ -248,7 +248,7 @@ impl PyramidCertifier {
         let (det_j, err, col, s) = self.det_j(ctrl);
         let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
         let (lo, up, s1) = bound_min(&det_j, 3, err, goal);
-        let (neg_lo, _, s2) = bound_min(&det_j.neg(), 3, err, goal);
+        let (neg_lo, neg_up, s2) = bound_min(&det_j.neg(), 3, err, goal);
         let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
         let (mut min_det, mut min_sj) = (f64::INFINITY, f64::INFINITY);
         for [a, b, c] in sample_points(m) {
@@ -261,7 +261,7 @@ impl PyramidCertifier {
             min_det = min_det.min(det(&j));
             min_sj = min_sj.min(scaled_det(&j));
         }
-        Certificate::of_normalised(3, s, (lo, up, neg_lo), (min_det, min_sj), s1 + s2)
+        Certificate::of_normalised(3, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
     }
 }
 
