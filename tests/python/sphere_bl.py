@@ -1,5 +1,5 @@
 """A hex boundary-layer O-grid around the sphere |x| = 0.5 inside the box
-[-1, 1]^3, made by Gmsh (geo kernel, all transfinite), written to OUT (MSH
+[-B, B]^3 (B = 1 unless --box B), made by Gmsh (geo kernel, all transfinite), written to OUT (MSH
 4.1, linear hexes). The 8 points (0.5/sqrt 3)(+-1, +-1, +-1), joined by
 great-circle arcs, give 6 spherical patches of N x N cells; 8 radial lines
 join them to the box corners, graded geometrically (ratio about G) so that the
@@ -15,7 +15,7 @@ With --order P, also curves the same mesh on the same CAD with Gmsh: setOrder
 (largest ||x| - 0.5| of 17 x 17 points per sphere face), "seconds"}, or
 {"method", "error"} when Gmsh throws.
 
-Usage: python sphere_bl.py FIRST N OUT.msh [--growth G] [--order P --method {setorder,fastcurving,elastic}]"""
+Usage: python sphere_bl.py FIRST N OUT.msh [--growth G] [--box B] [--order P --method {setorder,fastcurving,elastic}]"""
 import argparse, json, math
 import numpy as np
 import gmsh
@@ -26,10 +26,11 @@ ap.add_argument("first", type=float)
 ap.add_argument("n", type=int)
 ap.add_argument("out")
 ap.add_argument("--growth", type=float, default=1.3)
+ap.add_argument("--box", type=float, default=1.0)
 ap.add_argument("--order", type=int)
 ap.add_argument("--method", choices=["setorder", "fastcurving", "elastic"], default="setorder")
 a = ap.parse_args()
-R, L = 0.5, math.sqrt(3) - 0.5  # sphere radius, radial line length
+R, L = 0.5, a.box * math.sqrt(3) - 0.5  # sphere radius, radial line length
 
 
 def build(h):
@@ -39,7 +40,7 @@ def build(h):
     o = g.addPoint(0, 0, 0)
     sg = [((k >> 2 & 1) * 2 - 1, (k >> 1 & 1) * 2 - 1, (k & 1) * 2 - 1) for k in range(8)]
     sp = [g.addPoint(*(R / math.sqrt(3) * c for c in s)) for s in sg]
-    bp = [g.addPoint(*s) for s in sg]
+    bp = [g.addPoint(*(a.box * c for c in s)) for s in sg]
     # radial cells n and ratio q with a first cell h: L (q - 1) / (q^n - 1) = h
     n = max(1, round(math.log(1 + L * (a.growth - 1) / h) / math.log(a.growth)))
     lo, hi = 1.0 + 1e-12, 10.0
