@@ -835,8 +835,14 @@ pub const SETTLE_BAND: f64 = 30.0;
 /// Measured against the whole-mesh solve, relative change of the certified
 /// min det J at 4 / 8 / 12 bend lengths: ball octant p = 3 8e-7 / 4e-11 /
 /// 0; extruded 1e-3 layer p = 2 1.5e-4 / 3.3e-7 / 3.7e-8; tet ball in a
-/// box p = 3 6e-6 / 2.4e-8 / 1e-11; boundary errors equal throughout.
-pub const ALG2_BAND: f64 = 8.0;
+/// box p = 3 6e-6 / 2.4e-8 / 1e-11; the 1e-4 sphere layer in the box
+/// [-3, 3]³ (`tests/python/sphere_bl.py 1e-4 3 --box 3`), p = 2, 4 steps:
+/// 3.7e-5 at 8, 4.2e-7 at 12 (its facets are coarse: 3 × 3 on an octant
+/// of the sphere, and the motion reaches further); boundary errors equal
+/// throughout. Where the step control chooses another path, the runs
+/// differ by more (the 1e-5 extruded layer at p = 3: 2 steps on the whole
+/// mesh, 3 in the band, min det J 1.1 % apart).
+pub const ALG2_BAND: f64 = 12.0;
 
 /// The nodes within reach of `seeds`: breadth first through the cells,
 /// each reached node carrying the seed it was reached from and kept while
