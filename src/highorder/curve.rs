@@ -581,7 +581,9 @@ pub struct FirstLayer {
 pub struct Curved<const D: usize> {
     /// The mesh of order-p Lagrange elements.
     pub mesh: CurvedMesh<D>,
-    /// Per element, its det J certificate.
+    /// Per element, its det J certificate: bracketed to 1e-3
+    /// ([`CertifyOptions::element`]), to 1e-7 on the elements that may
+    /// hold the mesh's least or largest det J.
     pub certificates: Vec<Certificate>,
     /// Summary figures.
     pub quality: CurvedQuality,
@@ -601,14 +603,15 @@ pub struct Curved<const D: usize> {
     pub coarse_nodes: Vec<usize>,
 }
 
-/// Certifies every element; returns the certificates and the summary
-/// without the boundary figures.
+/// Certifies every element; returns the certificates (each bracketed to
+/// 1e-3, the mesh's least and largest det J to 1e-7: [`tighten`]) and the
+/// summary without the boundary figures.
 pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certificate>, CurvedQuality), HighOrderError> {
     certify_cells(mesh, None, &BTreeMap::new())
 }
 
 /// [`certify_mesh`], where the certificates of `known` are taken as they
-/// are and an element whose every node is where `straight` has it is
+/// are (but bracketed again if they may hold an extreme) and an element whose every node is where `straight` has it is
 /// certified as the order-1 element of its corners: the same map (the
 /// straight nodes are the linear cell's images), whose det J has a far
 /// lower degree (a trilinear hex: 27 Bernstein coefficients, against 729
@@ -1745,6 +1748,8 @@ mod tests {
             // on the hexes the loose brackets alone are not as tight (the
             // quads' and triangles' minima are at corners: exact at once)
             assert_eq!(rel(least(&loose), least(&fine)) > 1e-6, loose_differs, "{what}: {} against {}", least(&loose), least(&fine));
+            // (their maxima are inside: the loose brackets differ on both)
+            assert!(rel(most(&loose), most(&fine)) > 1e-6, "{what}: max {} against {}", most(&loose), most(&fine));
             let again = crate::quality::certify::extreme_candidates(&loose).len();
             assert!(again > 0 && 4 * again <= mesh.cells.len(), "{what}: {again} of {} bracketed again", mesh.cells.len());
         }
@@ -1790,15 +1795,19 @@ mod tests {
                     let coords = c.mesh.cell_coords(e);
                     let o = coords[0];
                     let ctrl: Vec<[f64; 2]> = coords.iter().map(|x| [x[0] - o[0], x[1] - o[1]]).collect();
-                    let mut dense = f64::INFINITY;
+                    let (mut dense, mut dense_max) = (f64::INFINITY, f64::NEG_INFINITY);
                     for k in 0..n * n {
                         let xi = [(k % n) as f64 / (n - 1) as f64, (k / n) as f64 / (n - 1) as f64];
                         let (_, j) = super::super::quad_map(p, c.mesh.spacing, &ctrl, xi).unwrap();
-                        dense = dense.min(j[0][0] * j[1][1] - j[0][1] * j[1][0]);
+                        let d = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                        (dense, dense_max) = (dense.min(d), dense_max.max(d));
                     }
                     let range = cert.max_det - cert.min_det_lower;
                     proptest::prop_assert!(cert.min_det_lower <= dense * (1.0 + 1e-12), "p={p} element {e}: {cert:?} dense {dense}");
                     proptest::prop_assert!(cert.min_det_upper <= dense + 1e-2 * range, "p={p} element {e}: {cert:?} dense {dense}");
+                    // the max's bracket, from the other side
+                    proptest::prop_assert!(dense_max <= cert.max_det * (1.0 + 1e-12) && cert.max_det_attained <= cert.max_det, "p={p} element {e}: {cert:?} dense max {dense_max}");
+                    proptest::prop_assert!(cert.max_det_attained >= dense_max - 1e-2 * range, "p={p} element {e}: {cert:?} dense max {dense_max}");
                     proptest::prop_assert!(!cert.valid || dense > 0.0);
                     proptest::prop_assert!(cert.valid, "a valid sector must be certified: p={p} element {e}: {cert:?}");
                 }

@@ -28,7 +28,7 @@ use std::collections::BinaryHeap;
 
 use smallvec::{smallvec, SmallVec};
 
-use super::certify::{gamma, normalise, Certificate, CertifyOptions, Goal, MAX_SUBDIVISION_DEPTH, U};
+use super::certify::{gamma, ZERO_FLOOR, normalise, Certificate, CertifyOptions, Goal, MAX_SUBDIVISION_DEPTH, U};
 use crate::mesh::element::basis::det;
 use crate::mesh::element::{check_order, HighOrderError, Shape};
 use crate::numeric::bezier::invert;
@@ -375,7 +375,7 @@ impl SimplexCertifier {
         let max_depth = self.dim * MAX_SUBDIVISION_DEPTH;
         let margin = err + max_depth as f64 * per_level;
         let settled = |lower: f64, upper: f64| match goal {
-            Goal::Bracket { rel_tol, .. } => lower >= upper - rel_tol * upper.abs().max(1e-9 * scale),
+            Goal::Bracket { rel_tol, .. } => lower >= upper - (rel_tol * upper.abs()).max(ZERO_FLOOR * scale),
             Goal::Sign => lower > margin,
         };
         let exhausted = |depth: usize, upper: f64, splits: usize| match goal {
