@@ -51,6 +51,7 @@ ALL_CASES=(
     "ball_octant_hex|tests/data/ball_octant_hex.msh|$DIR/ball.toml|0"
     "cylinder_bl_h005|$DIR/cylinder_bl_h005.msh|$DIR/cylinder.toml|1"
     "ball_octant_h006|$DIR/ball_octant_h006.msh|$DIR/ball.toml|1"
+    "ball_octant_h008|$DIR/ball_octant_h008.msh|$DIR/ball.toml|1"
 )
 CASES=${CASES:-"ball_octant_h012 ball_octant_hex cylinder_bl_h005 ball_octant_h006"}
 

@@ -149,6 +149,8 @@ def build_ball(gmsh, name, lc, generate=True):
 MESHES = {
     "ball_octant_h012": (build_ball, 0.12, 3, "ball.toml"),
     "ball_octant_h006": (build_ball, 0.06, 3, "ball.toml"),
+    # about the thin-layer issue's ball octant of 25,208 hexes
+    "ball_octant_h008": (build_ball, 0.08, 3, "ball.toml"),
     "cylinder_bl_h005": (build_cylinder, 0.05, 2, "cylinder.toml"),
     # the thin-layer issue's mesh of 10^6 hexes (about 1.07M; made only
     # when asked for with --only: minutes and gigabytes)
