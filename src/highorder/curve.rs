@@ -611,8 +611,9 @@ pub fn certify_mesh<const D: usize>(mesh: &CurvedMesh<D>) -> Result<(Vec<Certifi
 }
 
 /// [`certify_mesh`], where the certificates of `known` are taken as they
-/// are (but bracketed again if they may hold an extreme) and an element whose every node is where `straight` has it is
-/// certified as the order-1 element of its corners: the same map (the
+/// are (but bracketed again if they may hold an extreme) and an element
+/// whose every node is where `straight` has it is certified as the
+/// order-1 element of its corners: the same map (the
 /// straight nodes are the linear cell's images), whose det J has a far
 /// lower degree (a trilinear hex: 27 Bernstein coefficients, against 729
 /// at p = 3). Its scaled Jacobian is sampled on the order-p grid, as
@@ -629,7 +630,7 @@ fn certify_cells<const D: usize>(mesh: &CurvedMesh<D>, straight: Option<&[[f64; 
     let linear = Linear::new(mesh)?;
     let certify = |c: usize, opts: &CertifyOptions| match straight {
         Some(straight) if mesh.cells[c].iter().all(|&n| mesh.nodes[n] == straight[n]) => linear.certify(&certifiers, mesh, c, opts),
-        _ => certifiers.of(mesh.cell_shape(c)).certify(&mesh.cell_coords(c), opts),
+        _ => certify_cell(&certifiers, mesh, c, opts),
     };
     let mut certs: Vec<Certificate> = (0..mesh.cells.len())
         .into_par_iter()
@@ -649,6 +650,11 @@ fn certify_cells<const D: usize>(mesh: &CurvedMesh<D>, straight: Option<&[[f64; 
     tracing::debug!("certified {} elements ({} known, {again} bracketed again, {} splits)", certs.len(), known.len(), certs.iter().map(|c| c.splits).sum::<usize>());
     let q = summary(mesh, &certs);
     Ok((certs, q))
+}
+
+/// Cell `c` of `mesh` certified as the order-p element it is.
+fn certify_cell<const D: usize>(certifiers: &Certifiers, mesh: &CurvedMesh<D>, c: usize, opts: &CertifyOptions) -> Certificate {
+    certifiers.of(mesh.cell_shape(c)).certify(&mesh.cell_coords(c), opts)
 }
 
 /// Brackets the least and largest det J of a mesh whose elements' `certs`
@@ -693,7 +699,7 @@ impl Linear {
                 let ctrl: Vec<[f64; D]> = at.iter().map(|&a| mesh.nodes[mesh.cells[c][a]]).collect();
                 self.certifiers.of(shape).certify(&ctrl, &CertifyOptions { samples: self.samples, ..*opts })
             }
-            None => order_p.of(shape).certify(&mesh.cell_coords(c), opts),
+            None => certify_cell(order_p, mesh, c, opts),
         }
     }
 }
@@ -1314,7 +1320,7 @@ where
     let mut certificates = slid.certificates.clone();
     let touched = moved_cells(&snapped, &slid.mesh.nodes);
     let certifiers = Certifiers::new(&snapped.shapes(), snapped.p, snapped.spacing)?;
-    let certify = |c: usize, opts: &CertifyOptions| certifiers.of(snapped.cell_shape(c)).certify(&snapped.cell_coords(c), opts);
+    let certify = |c: usize, opts: &CertifyOptions| certify_cell(&certifiers, &snapped, c, opts);
     let fresh: Vec<Certificate> = touched.par_iter().map(|&c| certify(c, &CertifyOptions::element())).collect();
     // a snap that shears a thin cell stays valid but ruins it (measured:
     // a 1e-5 layer at p = 4, min scaled Jacobian 0.72 → 0.001): snapping
@@ -1738,7 +1744,7 @@ mod tests {
         use crate::refine::{subdivide_mixed, subdivide_mixed_solid};
         fn check<const D: usize>(mesh: &CurvedMesh<D>, what: &str, loose_differs: bool) {
             let certifiers = Certifiers::new(&mesh.shapes(), mesh.p, mesh.spacing).unwrap();
-            let all = |opts: CertifyOptions| -> Vec<Certificate> { (0..mesh.cells.len()).map(|c| certifiers.of(mesh.cell_shape(c)).certify(&mesh.cell_coords(c), &opts)).collect() };
+            let all = |opts: CertifyOptions| -> Vec<Certificate> { (0..mesh.cells.len()).map(|c| certify_cell(&certifiers, mesh, c, &opts)).collect() };
             let (fine, loose) = (all(CertifyOptions::default()), all(CertifyOptions::element()));
             let least = |cs: &[Certificate]| cs.iter().map(|c| c.min_det_lower).fold(f64::INFINITY, f64::min);
             let most = |cs: &[Certificate]| cs.iter().map(|c| c.max_det).fold(f64::NEG_INFINITY, f64::max);
