@@ -4,13 +4,19 @@
 # meshes of the issue, at p = 2 and 3, in one run: invalid elements, min
 # scaled Jacobian (ours: the certificate's Gmsh minSIGE; Gmsh's: its minSJ),
 # boundary error (largest distance of the sampled wall to its shape), time
-# (median of REPEAT runs, each Gmsh run in a fresh process on the same CAD).
+# (median of REPEAT runs, each Gmsh run in a fresh process on the same CAD;
+# ours the whole process: read, curve, certify, write the MSH, VTU, PNG and
+# report), and the curving alone (ours: the snap or Algorithm 2 with the
+# settling, and the certification, from the report; Gmsh's: its call).
 #
 # Usage: benches/simplices.sh [REPEAT] [--gmsh-only]     (REPEAT default 3)
 #   --gmsh-only  skip the deformesh runs
 #   DEFORMESH  binary (default target/release/deformesh)
 #   PYTHON     Python with gmsh (default .venv/bin/python)
 #   CASES      space-separated subset of the case names below
+#   METHODS    Gmsh's methods to run (default: setorder fastcurving elastic)
+#   GMSH_TIMEOUT  seconds a Gmsh run may take before its row says so
+#              (default 600; Elastic on the tet ball at p = 3 ran 17 min)
 #
 # triangle_mixed is the issue's mixed mesh (BoundaryLayer field with Quads =
 # 1): its 1,007 quads + 1,467 triangles are out of reach of
@@ -46,6 +52,9 @@ shape = { type = "sphere", centre = [0.0, 0.0, 0.0], radius = 0.5 }
 EOF
 median() { sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 field() { "$PYTHON" -c "import json,sys; print(json.load(sys.stdin)$1)"; }
+# the curving of a run of ours, from its report: Algorithm 2 (or the snap)
+# and the certification
+curving_s() { "$PYTHON" -c "import json,sys; r = json.load(open(sys.argv[1])); print(r['algorithm2_s'] + r['certify_s'])" "$1"; }
 
 # name script kind geometry wall-group [script args]
 ALL=(
@@ -57,7 +66,7 @@ CASES_RUN=()
 for c in "${ALL[@]}"; do
     if [[ -z "${CASES:-}" || " $CASES " == *" ${c%% *} "* ]]; then CASES_RUN+=("$c"); fi
 done
-printf '| mesh | p | tool | elements | invalid | min SJ | boundary error | time (s) |\n|---|---|---|---|---|---|---|---|\n'
+printf '| mesh | p | tool | elements | invalid | min SJ | boundary error | time (s) | curving (s) |\n|---|---|---|---|---|---|---|---|---|\n'
 for c in "${CASES_RUN[@]}"; do
     read -r name script kind geom group extra <<<"$c"
     read -r -a args <<<"${extra:-}"
@@ -68,35 +77,38 @@ for c in "${CASES_RUN[@]}"; do
             r="$OUT/out/${name}_p$p.report.json"
             rm -f "$r"
             times=()
+            curving=()
             ok=1
             for _ in $(seq "$REPEAT"); do
                 start=$(date +%s.%N)
                 "$DEFORMESH" curve "$mesh" --geometry "$OUT/$geom.toml" --order "$p" -o "$OUT/out/${name}_p$p.msh" >/dev/null 2>&1 || ok=0
                 times+=("$(echo "$(date +%s.%N) - $start" | bc)")
+                [[ -f "$r" ]] && curving+=("$(curving_s "$r")")
             done
             if [[ $ok == 1 && -f "$r" ]]; then
                 q=$(cat "$r")
-                printf '| %s | %s | deformesh | %s | %s | %.3f | %.2e | %.3f |\n' "$name" "$p" \
+                printf '| %s | %s | deformesh | %s | %s | %.3f | %.2e | %.3f | %.3f |\n' "$name" "$p" \
                     "$(field "['quality']['elements']" <<<"$q")" "$(field "['quality']['invalid_elements'].__len__()" <<<"$q")" \
                     "$(field "['quality']['scaled_jacobian']['min']" <<<"$q")" "$(field "['quality']['boundary_error']['$group']['samples']" <<<"$q")" \
-                    "$(printf '%s\n' "${times[@]}" | median)"
+                    "$(printf '%s\n' "${times[@]}" | median)" "$(printf '%s\n' "${curving[@]}" | median)"
             else
-                printf '| %s | %s | deformesh | failed | | | | |\n' "$name" "$p"
+                printf '| %s | %s | deformesh | failed | | | | | |\n' "$name" "$p"
             fi
         fi
-        for method in setorder fastcurving elastic; do
+        for method in ${METHODS:-setorder fastcurving elastic}; do
             secs=()
             for _ in $(seq "$REPEAT"); do
-                j=$("$PYTHON" "$script" "$kind" "$OUT/gmsh_$name.msh" ${args[@]+"${args[@]}"} --order "$p" --method "$method") || j='{"error": "failed"}'
+                j=$(timeout "${GMSH_TIMEOUT:-600}" "$PYTHON" "$script" "$kind" "$OUT/gmsh_$name.msh" ${args[@]+"${args[@]}"} --order "$p" --method "$method") || j='{"error": "failed or timed out"}'
                 secs+=("$(field "['seconds']" <<<"$j" 2>/dev/null || echo nan)")
             done
             if [[ $j == *'"error"'* ]]; then
-                printf '| %s | %s | Gmsh %s | failed | | | | |\n' "$name" "$p" "$method"
+                printf '| %s | %s | Gmsh %s | failed or timed out | | | | | |\n' "$name" "$p" "$method"
                 continue
             fi
-            printf '| %s | %s | Gmsh %s | %s | %s | %.3f | %.2e | %.3f |\n' "$name" "$p" "$method" \
+            secs=$(printf '%s\n' "${secs[@]}" | median)
+            printf '| %s | %s | Gmsh %s | %s | %s | %.3f | %.2e | %.3f | %.3f |\n' "$name" "$p" "$method" \
                 "$(field "['elements']" <<<"$j")" "$(field "['invalid']" <<<"$j")" "$(field "['min_sj']" <<<"$j")" \
-                "$(field "['boundary_sample_distance']" <<<"$j")" "$(printf '%s\n' "${secs[@]}" | median)"
+                "$(field "['boundary_sample_distance']" <<<"$j")" "$secs" "$secs"
         done
     done
 done

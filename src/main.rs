@@ -98,7 +98,8 @@ enum Command {
         /// auto: first put the new boundary nodes on the shapes, nothing
         /// else moved (Gmsh's setOrder), and keep that without running
         /// Algorithm 2 if every element is certified valid and keeps 0.9
-        /// of its straight scaled Jacobian; never: always Algorithm 2.
+        /// of its straight scaled Jacobian or of the straight mesh's least
+        /// (its worst element's); never: always Algorithm 2.
         #[arg(long, default_value = "auto")]
         snap: String,
         /// The curved mesh to write: its extension chooses the format
@@ -262,7 +263,7 @@ fn run(cli: Cli) -> Result<()> {
             let snap = &r.quality.snap_first;
             if snap.kept {
                 let places = if snap.fitted { "fitted places" } else { "places at equal arc length (the fitted ones cost a cell its shape)" };
-                println!("snap: new boundary nodes put at their {places} on the shapes, every element valid and within {} of its straight scaled Jacobian: Algorithm 2 not run", deformesh::highorder::curve::SNAP_KEEP);
+                println!("snap: new boundary nodes put at their {places} on the shapes, every element valid and within {} of its straight scaled Jacobian or of the straight mesh's least: Algorithm 2 not run", deformesh::highorder::curve::SNAP_KEEP);
                 println!("time: snap and certification {:.3}s  total {:.3}s{memory}", r.certify_s + r.algorithm2_s, r.total_s);
             } else {
                 if let Some(why) = &snap.refused {
