@@ -19,8 +19,6 @@
 //! verdict sound: [`certify`] brackets the minimum by a best-first branch
 //! and bound, [`Certifier::is_valid`] only decides its sign.
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use smallvec::SmallVec;
 use std::sync::OnceLock;
 
@@ -406,36 +404,6 @@ pub(crate) enum Goal {
     Sign,
 }
 
-/// A box of the branch and bound, ordered so the heap pops the smallest
-/// lower bound first.
-struct BoxItem {
-    lower: f64,
-    poly: Bezier,
-    /// How many times it was split from the whole element.
-    depth: usize,
-    /// How many halvings in one variable made it (`dim · depth` when
-    /// every split halves every variable): each adds a rounding bound.
-    cuts: usize,
-}
-
-impl PartialEq for BoxItem {
-    fn eq(&self, other: &Self) -> bool {
-        self.lower.total_cmp(&other.lower) == Ordering::Equal
-    }
-}
-impl Eq for BoxItem {}
-impl PartialOrd for BoxItem {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for BoxItem {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // reversed: BinaryHeap is a max-heap
-        other.lower.total_cmp(&self.lower)
-    }
-}
-
 /// `(lower, upper, splits)`: a certified lower bound of the minimum of
 /// the exact polynomial over its box, a bound above a value it attains
 /// (upper bound of the minimum) and the number of splits used, given
@@ -446,55 +414,25 @@ impl Ord for BoxItem {
 /// runs on the computed coefficients; the rounding bounds are applied to
 /// its result. For [`Goal::Sign`] the minimum is positive iff `lower > 0`.
 pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64, f64, usize) {
-    // a coordinate that is not finite leaves coefficients NaN, which the
-    // min and max folds would skip: no bound, never valid
-    if !poly.coef.iter().all(|c| c.is_finite()) || !err.is_finite() {
-        return (f64::NEG_INFINITY, f64::INFINITY, 0);
-    }
-    let scale = poly.max_abs();
     // A halving in one variable applies rows of non-negative weights
-    // summing to one (binomial / 2^k, exact): at most n + 2 roundings on
-    // terms whose absolute values sum to at most the largest coefficient
-    // plus its error. So each cut adds at most this to a box's error.
+    // summing to one (binomial / 2^k, exact): at most n + 2 roundings.
     let n = poly.deg.iter().max().copied().unwrap_or(0);
-    let per_cut = gamma(n + 2) * (scale + 2.0 * err);
-    // the sign test compares with the error of the deepest box allowed
-    let margin = err + (dim * MAX_SUBDIVISION_DEPTH) as f64 * per_cut;
-    // The floor keeps a minimum of exactly 0 from asking for infinite
-    // relative precision; it is absolute, whatever `rel_tol`: tied to it,
-    // a bracket to 1e-3 would settle at 1e-12 of the coefficients, and an
-    // element whose minimum is positive but smaller would end undecided,
-    // not valid.
-    let settled = |lower: f64, upper: f64| match goal {
-        Goal::Bracket { rel_tol, .. } => lower >= upper - (rel_tol * upper.abs()).max(ZERO_FLOOR * scale),
-        Goal::Sign => lower > margin,
-    };
-    // A corner value within its error of 0 stays so in every sub-box.
-    let exhausted = |depth: usize, upper: f64, splits: usize| match goal {
-        Goal::Bracket { max_splits, .. } => splits >= max_splits,
-        Goal::Sign => depth >= MAX_SUBDIVISION_DEPTH || upper <= margin,
-    };
-    let (mut splits, mut deepest) = (0, 0);
-    let result = |lower: f64, upper: f64, splits: usize, deepest: usize| {
-        let e = if let Goal::Sign = goal { margin } else { err + deepest as f64 * per_cut };
-        (lower - e, upper + e, splits)
-    };
-    let mut upper = poly.min_corner();
-    let mut pruned = f64::INFINITY;
-    // most linear cells are settled here, with no copy and no heap
-    let lower = poly.coef_bounds().0;
-    if settled(lower, upper) || exhausted(0, upper, 0) {
-        return result(lower, upper, 0, 0);
+    super::branch::bound_min(poly, &dim, dim, n + 2, err, goal)
+}
+
+/// A box of a tensor element, halved in the variables
+/// [`split_directions`] chooses; its context is the dimension.
+impl super::branch::Piece for Bezier {
+    type Context = usize;
+    fn coefficients(&self) -> &[f64] {
+        &self.coef
     }
-    let mut heap = BinaryHeap::new();
-    let mut top = BoxItem { lower, poly: poly.clone(), depth: 0, cuts: 0 };
-    loop {
-        splits += 1;
-        let depth = top.depth + 1;
-        let dirs = split_directions(&top.poly, dim, goal);
-        let cuts = top.cuts + dirs.len();
-        deepest = deepest.max(cuts);
-        let mut parts = vec![top.poly];
+    fn least_vertex(&self, _: &usize) -> f64 {
+        self.min_corner()
+    }
+    fn cut(self, &dim: &usize, goal: Goal) -> (SmallVec<[Bezier; 8]>, usize) {
+        let dirs = split_directions(&self, dim, goal);
+        let mut parts: SmallVec<[Bezier; 8]> = smallvec::smallvec![self];
         for &d in &dirs {
             parts = parts
                 .into_iter()
@@ -504,25 +442,7 @@ pub(crate) fn bound_min(poly: &Bezier, dim: usize, err: f64, goal: Goal) -> (f64
                 })
                 .collect();
         }
-        for b in &parts {
-            upper = upper.min(b.min_corner());
-        }
-        for b in parts {
-            let lower = b.coef_bounds().0;
-            if settled(lower, upper) {
-                pruned = pruned.min(lower);
-            } else {
-                heap.push(BoxItem { lower, poly: b, depth, cuts });
-            }
-        }
-        match heap.pop() {
-            Some(next) => top = next,
-            // every box was pruned: the minimum is within tol of upper
-            None => return result(pruned.min(upper), upper, splits, deepest),
-        }
-        if settled(top.lower, upper) || exhausted(top.depth, upper, splits) {
-            return result(top.lower.min(pruned), upper, splits, deepest);
-        }
+        (parts, dirs.len())
     }
 }
 

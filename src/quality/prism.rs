@@ -50,17 +50,16 @@
 //! see the test).
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
-use smallvec::smallvec;
+use smallvec::{smallvec, SmallVec};
 
-use super::certify::{gamma, ZERO_FLOOR, normalise, Certificate, CertifyOptions, Conversion as LineConversion, Goal, MAX_SUBDIVISION_DEPTH, U};
+use super::certify::{gamma, normalise, Certificate, CertifyOptions, Conversion as LineConversion, Goal, U};
 use super::simplex::{constant_jacobian, Conversion as TriConversion};
 use crate::mesh::element::basis::det;
 use crate::mesh::element::{check_order, HighOrderError};
 use crate::numeric::bezier::bernstein;
 use crate::numeric::prism_bezier::{PrismDerivative, PrismLattice, PrismProduct, PrismSplit};
-use crate::numeric::simplex_bezier::{coef_bounds, edges, max_abs, multi_indices, Coef, Lattice};
+use crate::numeric::simplex_bezier::{edges, max_abs, multi_indices, Coef, Lattice};
 use crate::numeric::{dist2, dot, sub};
 
 /// The number of nodes of the order-`p` triangle.
@@ -132,37 +131,27 @@ impl DetParts {
 }
 
 /// A piece of the branch and bound: the polynomial on a sub-prism (its
-/// triangle's reference vertices by barycentric slot, its z interval),
-/// ordered so that the heap pops the smallest lower bound first.
+/// triangle's reference vertices by barycentric slot, its z interval).
+#[derive(Clone)]
 struct Piece {
-    lower: f64,
     coef: Coef,
     tri: [[f64; 2]; 3],
     z: [f64; 2],
-    /// How many cuts made it from the whole element.
-    depth: usize,
 }
 
-impl PartialEq for Piece {
-    fn eq(&self, other: &Self) -> bool {
-        self.lower.total_cmp(&other.lower) == Ordering::Equal
+impl super::branch::Piece for Piece {
+    type Context = PrismCertifier;
+    fn coefficients(&self) -> &[f64] {
+        &self.coef
     }
-}
-impl Eq for Piece {}
-impl PartialOrd for Piece {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
+    fn least_vertex(&self, cx: &PrismCertifier) -> f64 {
+        cx.min_vertex(&self.coef)
     }
-}
-impl Ord for Piece {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // reversed: BinaryHeap is a max-heap
-        other.lower.total_cmp(&self.lower)
+    fn cut(self, cx: &PrismCertifier, _: Goal) -> (SmallVec<[Piece; 8]>, usize) {
+        (cx.bisect(&self).into_iter().collect(), 1)
     }
 }
 
-/// A half of a piece: coefficients, their smallest, triangle, z interval.
-type Half = (Coef, f64, [[f64; 2]; 3], [f64; 2]);
 
 /// The bases of the Jacobian's columns on a sampling lattice of `m` points
 /// per edge of the triangle times `m` along z: on the triangle points,
@@ -330,7 +319,7 @@ impl PrismCertifier {
     /// where the halves' bound rises most, tried too, cut the same factor
     /// over and over into slabs: five times the splits on random curved
     /// prisms; the gap rule takes 5 % fewer than alternating by size.)
-    fn bisect(&self, piece: &Piece) -> [Half; 2] {
+    fn bisect(&self, piece: &Piece) -> [Piece; 2] {
         let len2 = |&(a, b): &(usize, usize)| dist2(piece.tri[a], piece.tri[b]);
         let all = edges(2);
         let e = (0..all.len()).fold(0, |best, e| if len2(&all[e]) > len2(&all[best]) { e } else { best });
@@ -340,10 +329,7 @@ impl PrismCertifier {
             Some(Ordering::Less) => false,
             _ => len2(&all[e]) >= (piece.z[1] - piece.z[0]).powi(2),
         };
-        let half = |coef: Coef, tri, z| {
-            let lower = coef_bounds(&coef).0;
-            (coef, lower, tri, z)
-        };
+        let half = |coef: Coef, tri, z| Piece { coef, tri, z };
         if across {
             let (a, b) = all[e];
             let (ta, tb) = self.split.tri(e, &piece.coef);
@@ -361,73 +347,22 @@ impl PrismCertifier {
 
     /// `(lower, upper, splits)` of the minimum of the exact det J over the
     /// element, given `poly` whose coefficients are within `err` of the
-    /// exact ones: [`super::simplex`]'s `bound_min` with the prism's cut.
-    /// One split is one cut (two pieces); three cuts (two across the
-    /// triangle, one along z) halve a piece about as one box split does,
-    /// so [`Goal::Sign`] allows `3 ·` [`MAX_SUBDIVISION_DEPTH`] of them.
+    /// exact ones: the branch and bound of [`super::branch`] with the
+    /// prism's cut. One split is one cut (two pieces); three cuts (two
+    /// across the triangle, one along z) halve a piece about as one box
+    /// split does.
     fn bound_min(&self, poly: &Coef, err: f64, goal: Goal) -> (f64, f64, usize) {
-        if !err.is_finite() {
-            return (f64::NEG_INFINITY, f64::INFINITY, 0);
-        }
-        let scale = max_abs(poly);
         // A cut applies to each line of coefficients rows of non-negative
         // weights summing to one (at most 3p − 1 averaging steps, one
-        // rounding each): it adds at most this to the error.
-        let per_level = gamma(3 * self.p + 1) * (scale + 2.0 * err);
-        let max_depth = 3 * MAX_SUBDIVISION_DEPTH;
-        let margin = err + max_depth as f64 * per_level;
-        let settled = |lower: f64, upper: f64| match goal {
-            Goal::Bracket { rel_tol, .. } => lower >= upper - (rel_tol * upper.abs()).max(ZERO_FLOOR * scale),
-            Goal::Sign => lower > margin,
-        };
-        let exhausted = |depth: usize, upper: f64, splits: usize| match goal {
-            Goal::Bracket { max_splits, .. } => splits >= max_splits,
-            Goal::Sign => depth >= max_depth || upper <= margin,
-        };
-        let result = |lower: f64, upper: f64, splits: usize, deepest: usize| {
-            let e = if let Goal::Sign = goal { margin } else { err + deepest as f64 * per_level };
-            (lower - e, upper + e, splits)
-        };
-        let mut upper = self.min_vertex(poly);
-        let lower = coef_bounds(poly).0;
-        // straight and mildly curved elements are settled here, with no
-        // copy and no heap
-        if settled(lower, upper) || exhausted(0, upper, 0) {
-            return result(lower, upper, 0, 0);
-        }
-        let (mut splits, mut deepest, mut pruned) = (0, 0, f64::INFINITY);
-        let mut heap = BinaryHeap::new();
-        let mut top = Piece { lower, coef: poly.clone(), tri: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], z: [0.0, 1.0], depth: 0 };
-        loop {
-            splits += 1;
-            let depth = top.depth + 1;
-            deepest = deepest.max(depth);
-            let halves = self.bisect(&top);
-            for (coef, ..) in &halves {
-                upper = upper.min(self.min_vertex(coef));
-            }
-            for (coef, lower, tri, z) in halves {
-                if settled(lower, upper) {
-                    pruned = pruned.min(lower);
-                } else {
-                    heap.push(Piece { lower, coef, tri, z, depth });
-                }
-            }
-            match heap.pop() {
-                Some(next) => top = next,
-                // every piece was pruned: the minimum is within tol of upper
-                None => return result(pruned.min(upper), upper, splits, deepest),
-            }
-            if settled(top.lower, upper) || exhausted(top.depth, upper, splits) {
-                return result(top.lower.min(pruned), upper, splits, deepest);
-            }
-        }
+        // rounding each).
+        let root = Piece { coef: poly.clone(), tri: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], z: [0.0, 1.0] };
+        super::branch::bound_min(&root, self, 3, 3 * self.p + 1, err, goal)
     }
 
     /// Whether `det J > 0` on the whole element (control points in lattice
     /// order), decided conservatively: `true` is a proof; `false` means
     /// invalid or so nearly invalid that det J comes within the Bernstein
-    /// bound's slack of 0 on a piece `3 ·` [`MAX_SUBDIVISION_DEPTH`] cuts
+    /// bound's slack of 0 on a piece `3 ·` [`MAX_SUBDIVISION_DEPTH`](super::certify::MAX_SUBDIVISION_DEPTH) cuts
     /// deep. Cheaper than [`PrismCertifier::certify`].
     ///
     /// # Panics
@@ -514,6 +449,7 @@ pub(crate) fn scaled_jacobian(j: &[[f64; 3]; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::simplex_bezier::coef_bounds;
     use crate::mesh::element::prism::{space, PrismSpace};
     use crate::mesh::element::Spacing;
 

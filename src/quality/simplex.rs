@@ -23,16 +23,14 @@
 //! (triangle `(i, j)`, `j` outer; tetrahedron `(i, j, k)`, `k` outermost,
 //! `i` fastest; equispaced node at `(i, j, k) / p`).
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 use smallvec::{smallvec, SmallVec};
 
-use super::certify::{gamma, ZERO_FLOOR, normalise, Certificate, CertifyOptions, Goal, MAX_SUBDIVISION_DEPTH, U};
+use super::certify::{gamma, normalise, Certificate, CertifyOptions, Goal, U};
 use crate::mesh::element::basis::det;
 use crate::mesh::element::{check_order, HighOrderError, Shape};
 use crate::numeric::bezier::invert;
-use crate::numeric::simplex_bezier::{coef_bounds, edges, max_abs, multi_indices, Coef, Derivative, Lattice, Product, Split};
+use crate::numeric::simplex_bezier::{edges, max_abs, multi_indices, Coef, Derivative, Lattice, Product, Split};
 use crate::numeric::{dot, sub};
 
 /// `C(p + d, d)`, the number of nodes of an order-`p` `d`-simplex.
@@ -183,31 +181,24 @@ impl<const D: usize> DetParts<D> {
 }
 
 /// A piece of the branch and bound: the polynomial on a sub-simplex (its
-/// reference vertices by barycentric slot), ordered so that the heap pops
-/// the smallest lower bound first.
+/// reference vertices by barycentric slot).
+#[derive(Clone)]
 struct Piece {
-    lower: f64,
     coef: Coef,
     verts: [[f64; 3]; 4],
-    /// How many bisections made it from the whole element.
-    depth: usize,
 }
 
-impl PartialEq for Piece {
-    fn eq(&self, other: &Self) -> bool {
-        self.lower.total_cmp(&other.lower) == Ordering::Equal
+impl super::branch::Piece for Piece {
+    type Context = SimplexCertifier;
+    fn coefficients(&self) -> &[f64] {
+        &self.coef
     }
-}
-impl Eq for Piece {}
-impl PartialOrd for Piece {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
+    fn least_vertex(&self, cx: &SimplexCertifier) -> f64 {
+        cx.min_vertex(&self.coef)
     }
-}
-impl Ord for Piece {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // reversed: BinaryHeap is a max-heap
-        other.lower.total_cmp(&self.lower)
+    fn cut(self, cx: &SimplexCertifier, _: Goal) -> (SmallVec<[Piece; 8]>, usize) {
+        let [(a, va), (b, vb)] = cx.bisect(&self.coef, &self.verts);
+        (smallvec![Piece { coef: a, verts: va }, Piece { coef: b, verts: vb }], 1)
     }
 }
 
@@ -355,78 +346,21 @@ impl SimplexCertifier {
 
     /// `(lower, upper, splits)` of the minimum of the exact det J over the
     /// element, given `poly` whose coefficients are within `err` of the
-    /// exact ones: [`super::certify`]'s `bound_min` on simplices. Best
-    /// first: always bisect the piece with the smallest lower bound; drop
-    /// pieces that are settled (within `rel_tol` of the best value found,
-    /// or certainly positive for [`Goal::Sign`]). One split is one
-    /// bisection (two pieces); `D` bisections halve a piece about as one
-    /// box split does, so [`Goal::Sign`] allows `D ·`
-    /// [`MAX_SUBDIVISION_DEPTH`] of them.
+    /// exact ones: the branch and bound of [`super::branch`] on
+    /// sub-simplices. One split is one bisection (two pieces); `D`
+    /// bisections halve a piece about as one box split does.
     fn bound_min(&self, poly: &Coef, err: f64, goal: Goal) -> (f64, f64, usize) {
-        if !err.is_finite() {
-            return (f64::NEG_INFINITY, f64::INFINITY, 0);
-        }
-        let scale = max_abs(poly);
         // A bisection applies to each line of coefficients rows of
         // non-negative weights summing to one (at most deg averaging
-        // steps, one rounding each): it adds at most this to the error.
+        // steps, one rounding each).
         let n = self.dim * (self.p - 1);
-        let per_level = gamma(n + 2) * (scale + 2.0 * err);
-        let max_depth = self.dim * MAX_SUBDIVISION_DEPTH;
-        let margin = err + max_depth as f64 * per_level;
-        let settled = |lower: f64, upper: f64| match goal {
-            Goal::Bracket { rel_tol, .. } => lower >= upper - (rel_tol * upper.abs()).max(ZERO_FLOOR * scale),
-            Goal::Sign => lower > margin,
-        };
-        let exhausted = |depth: usize, upper: f64, splits: usize| match goal {
-            Goal::Bracket { max_splits, .. } => splits >= max_splits,
-            Goal::Sign => depth >= max_depth || upper <= margin,
-        };
-        let result = |lower: f64, upper: f64, splits: usize, deepest: usize| {
-            let e = if let Goal::Sign = goal { margin } else { err + deepest as f64 * per_level };
-            (lower - e, upper + e, splits)
-        };
-        let mut upper = self.min_vertex(poly);
-        let lower = coef_bounds(poly).0;
-        // straight and mildly curved elements are settled here, with no
-        // copy and no heap
-        if settled(lower, upper) || exhausted(0, upper, 0) {
-            return result(lower, upper, 0, 0);
-        }
-        let (mut splits, mut deepest, mut pruned) = (0, 0, f64::INFINITY);
-        let mut heap = BinaryHeap::new();
-        let mut top = Piece { lower, coef: poly.clone(), verts: REFERENCE, depth: 0 };
-        loop {
-            splits += 1;
-            let depth = top.depth + 1;
-            deepest = deepest.max(depth);
-            let halves = self.bisect(&top.coef, &top.verts);
-            for (coef, _) in &halves {
-                upper = upper.min(self.min_vertex(coef));
-            }
-            for (coef, verts) in halves {
-                let lower = coef_bounds(&coef).0;
-                if settled(lower, upper) {
-                    pruned = pruned.min(lower);
-                } else {
-                    heap.push(Piece { lower, coef, verts, depth });
-                }
-            }
-            match heap.pop() {
-                Some(next) => top = next,
-                // every piece was pruned: the minimum is within tol of upper
-                None => return result(pruned.min(upper), upper, splits, deepest),
-            }
-            if settled(top.lower, upper) || exhausted(top.depth, upper, splits) {
-                return result(top.lower.min(pruned), upper, splits, deepest);
-            }
-        }
+        super::branch::bound_min(&Piece { coef: poly.clone(), verts: REFERENCE }, self, self.dim, n + 2, err, goal)
     }
 
     /// Whether `det J > 0` on the whole element (control points in lattice
     /// order), decided conservatively: `true` is a proof; `false` means
     /// invalid or so nearly invalid that det J comes within the Bernstein
-    /// bound's slack of 0 on a piece `D ·` [`MAX_SUBDIVISION_DEPTH`]
+    /// bound's slack of 0 on a piece `D ·` [`MAX_SUBDIVISION_DEPTH`](super::certify::MAX_SUBDIVISION_DEPTH)
     /// bisections deep. Cheaper than [`SimplexCertifier::certify`].
     ///
     /// # Panics
@@ -587,6 +521,7 @@ pub fn equispaced_nodes(shape: Shape, p: usize) -> Vec<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::simplex_bezier::coef_bounds;
 
     /// A deterministic pseudo-random sequence in [-1, 1].
     fn lcg(seed: &mut u64) -> f64 {
