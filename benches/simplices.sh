@@ -14,6 +14,7 @@
 #   DEFORMESH  binary (default target/release/deformesh)
 #   PYTHON     Python with gmsh (default .venv/bin/python)
 #   CASES      space-separated subset of the case names below
+#   ORDERS     the orders to run (default: 2 3)
 #   METHODS    Gmsh's methods to run (default: setorder fastcurving elastic)
 #   GMSH_TIMEOUT  seconds a Gmsh run may take before its row says so
 #              (default 600; Elastic on the tet ball at p = 3 ran 17 min)
@@ -72,7 +73,7 @@ for c in "${CASES_RUN[@]}"; do
     read -r -a args <<<"${extra:-}"
     mesh="$OUT/$name.msh"
     "$PYTHON" "$script" "$kind" "$mesh" ${args[@]+"${args[@]}"} >/dev/null
-    for p in 2 3; do
+    for p in ${ORDERS:-2 3}; do
         if [[ $OURS == 1 ]]; then
             r="$OUT/out/${name}_p$p.report.json"
             rm -f "$r"

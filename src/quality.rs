@@ -17,6 +17,7 @@
 //! - J/f of a cell is |K_t| / ∫_{K₀} f(φ(ξ), t) dξ: 1 when the cell's
 //!   size is what the prescribed Jacobian asks for.
 
+mod branch;
 pub mod certify;
 pub mod prism;
 pub mod pyramid;
