@@ -152,7 +152,6 @@ impl super::branch::Piece for Piece {
     }
 }
 
-
 /// The bases of the Jacobian's columns on a sampling lattice of `m` points
 /// per edge of the triangle times `m` along z: on the triangle points,
 /// degree `p − 1` (columns ξ, η) and `p` (column ζ), row after row; on
@@ -351,11 +350,11 @@ impl PrismCertifier {
     /// prism's cut. One split is one cut (two pieces); three cuts (two
     /// across the triangle, one along z) halve a piece about as one box
     /// split does.
-    fn bound_min(&self, poly: &Coef, err: f64, goal: Goal) -> (f64, f64, usize) {
+    fn bound_min(&self, poly: Coef, err: f64, goal: Goal) -> (f64, f64, usize) {
         // A cut applies to each line of coefficients rows of non-negative
         // weights summing to one (at most 3p − 1 averaging steps, one
         // rounding each).
-        let root = Piece { coef: poly.clone(), tri: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], z: [0.0, 1.0] };
+        let root = Piece { coef: poly, tri: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], z: [0.0, 1.0] };
         super::branch::bound_min(&root, self, 3, 3 * self.p + 1, err, goal)
     }
 
@@ -369,7 +368,7 @@ impl PrismCertifier {
     /// If `D` is not 3 or `ctrl` has the wrong length.
     pub fn is_valid<const D: usize>(&self, ctrl: &[[f64; D]]) -> bool {
         let (parts, err, _) = self.det_j(ctrl);
-        self.bound_min(&parts.det, err, Goal::Sign).0 > 0.0
+        self.bound_min(parts.det, err, Goal::Sign).0 > 0.0
     }
 
     /// The certificate of the element with control points `ctrl` (lattice
@@ -384,9 +383,9 @@ impl PrismCertifier {
     pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
         let (parts, err, s) = self.det_j(ctrl);
         let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
-        let (lo, up, s1) = self.bound_min(&parts.det, err, goal);
         let neg: Coef = parts.det.iter().map(|c| -c).collect();
-        let (neg_lo, neg_up, s2) = self.bound_min(&neg, err, goal);
+        let (lo, up, s1) = self.bound_min(parts.det, err, goal);
+        let (neg_lo, neg_up, s2) = self.bound_min(neg, err, goal);
         let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
         let (min_det, min_sj) = match constant_jacobian(&parts.col, parts.deriv_max) {
             // a straight-sided prism: its J, hence both figures, is the

@@ -23,7 +23,6 @@
 //! (triangle `(i, j)`, `j` outer; tetrahedron `(i, j, k)`, `k` outermost,
 //! `i` fastest; equispaced node at `(i, j, k) / p`).
 
-
 use smallvec::{smallvec, SmallVec};
 
 use super::certify::{gamma, normalise, Certificate, CertifyOptions, Goal, U};
@@ -197,8 +196,7 @@ impl super::branch::Piece for Piece {
         cx.min_vertex(&self.coef)
     }
     fn cut(self, cx: &SimplexCertifier, _: Goal) -> (SmallVec<[Piece; 8]>, usize) {
-        let [(a, va), (b, vb)] = cx.bisect(&self.coef, &self.verts);
-        (smallvec![Piece { coef: a, verts: va }, Piece { coef: b, verts: vb }], 1)
+        (cx.bisect(&self).into_iter().collect(), 1)
     }
 }
 
@@ -331,17 +329,18 @@ impl SimplexCertifier {
     /// The two halves of a piece, bisecting its longest reference edge
     /// (the first of [`edges`] on ties): the pieces' diameters go to zero,
     /// and with them the gap of the Bernstein bound, quadratically.
-    fn bisect(&self, coef: &[f64], verts: &[[f64; 3]; 4]) -> [(Coef, [[f64; 3]; 4]); 2] {
+    fn bisect(&self, piece: &Piece) -> [Piece; 2] {
+        let verts = &piece.verts;
         let len2 = |&(a, b): &(usize, usize)| crate::numeric::dist2(verts[a], verts[b]);
         let all = edges(self.dim);
         let e = (0..all.len()).fold(0, |best, e| if len2(&all[e]) > len2(&all[best]) { e } else { best });
         let (a, b) = all[e];
         let mid: [f64; 3] = std::array::from_fn(|r| 0.5 * (verts[a][r] + verts[b][r]));
-        let (near_a, near_b) = self.split.apply(e, coef);
+        let (near_a, near_b) = self.split.apply(e, &piece.coef);
         let (mut va, mut vb) = (*verts, *verts);
         va[b] = mid;
         vb[a] = mid;
-        [(near_a, va), (near_b, vb)]
+        [Piece { coef: near_a, verts: va }, Piece { coef: near_b, verts: vb }]
     }
 
     /// `(lower, upper, splits)` of the minimum of the exact det J over the
@@ -349,12 +348,12 @@ impl SimplexCertifier {
     /// exact ones: the branch and bound of [`super::branch`] on
     /// sub-simplices. One split is one bisection (two pieces); `D`
     /// bisections halve a piece about as one box split does.
-    fn bound_min(&self, poly: &Coef, err: f64, goal: Goal) -> (f64, f64, usize) {
+    fn bound_min(&self, poly: Coef, err: f64, goal: Goal) -> (f64, f64, usize) {
         // A bisection applies to each line of coefficients rows of
         // non-negative weights summing to one (at most deg averaging
         // steps, one rounding each).
         let n = self.dim * (self.p - 1);
-        super::branch::bound_min(&Piece { coef: poly.clone(), verts: REFERENCE }, self, self.dim, n + 2, err, goal)
+        super::branch::bound_min(&Piece { coef: poly, verts: REFERENCE }, self, self.dim, n + 2, err, goal)
     }
 
     /// Whether `det J > 0` on the whole element (control points in lattice
@@ -367,7 +366,7 @@ impl SimplexCertifier {
     /// If `D` is not the shape's dimension or `ctrl` has the wrong length.
     pub fn is_valid<const D: usize>(&self, ctrl: &[[f64; D]]) -> bool {
         let (parts, err, _) = self.det_j(ctrl);
-        self.bound_min(&parts.det, err, Goal::Sign).0 > 0.0
+        self.bound_min(parts.det, err, Goal::Sign).0 > 0.0
     }
 
     /// The certificate of the element with control points `ctrl` (lattice
@@ -380,9 +379,9 @@ impl SimplexCertifier {
     pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
         let (parts, err, s) = self.det_j(ctrl);
         let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
-        let (lo, up, s1) = self.bound_min(&parts.det, err, goal);
         let neg: Coef = parts.det.iter().map(|c| -c).collect();
-        let (neg_lo, neg_up, s2) = self.bound_min(&neg, err, goal);
+        let (lo, up, s1) = self.bound_min(parts.det, err, goal);
+        let (neg_lo, neg_up, s2) = self.bound_min(neg, err, goal);
         let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
         let (min_det, min_sj) = match constant_jacobian(&parts.col, parts.deriv_max) {
             // a straight-sided element (most of a mesh curved at its walls):
