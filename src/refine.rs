@@ -30,7 +30,7 @@ use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, Mo
 use crate::lsfem::Constraint;
 use crate::mesh::element::{nodes_1d, prism, pyramid, simplex, Shape, Spacing};
 use crate::mesh::mixed::{hex_tets, prism_tets, pyramid_tets};
-use crate::mesh::{cut_quad, BoundaryEdge, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
+use crate::mesh::{cut_quad, BoundaryEdge, Cells, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
@@ -108,9 +108,10 @@ pub struct Subdivision<M, const D: usize> {
     pub fine: M,
     /// The coarse cells' shape.
     pub shape: Shape,
-    /// Per coarse cell, its fine nodes in the element's order: tensor
-    /// order (first reference axis fastest) or the simplex lattice order.
-    pub elements: Vec<Vec<usize>>,
+    /// Per coarse cell, its fine nodes in the element's order (tensor
+    /// order, first reference axis fastest, or its kind's lattice order),
+    /// in blocks of one kind.
+    pub elements: Cells,
     /// Per coarse boundary facet, its (p+1)^(D−1) fine nodes in tensor
     /// order of the facet's own frame, and its part.
     pub facets: Vec<(Vec<usize>, usize)>,
@@ -129,15 +130,15 @@ pub struct Subdivision<M, const D: usize> {
 }
 
 impl<M, const D: usize> Subdivision<M, D> {
-    /// The kind of coarse element `e`, told by its node count (a mixed
-    /// mesh holds quads and triangles, or tetrahedra and prisms).
+    /// The kind of coarse element `e` (a mixed mesh holds quads and
+    /// triangles, or tetrahedra and prisms).
     pub fn element_shape(&self, e: usize) -> Shape {
-        Shape::with_nodes(D, self.p, self.elements[e].len()).unwrap_or(self.shape)
+        self.elements.shape(e)
     }
 
     /// The kinds of its elements, in the order of [`Shape`].
     pub fn shapes(&self) -> Vec<Shape> {
-        let mut out: Vec<Shape> = (0..self.elements.len()).map(|e| self.element_shape(e)).collect();
+        let mut out: Vec<Shape> = self.elements.blocks().iter().map(|b| b.shape).collect();
         out.push(self.shape);
         out.sort();
         out.dedup();
@@ -373,6 +374,7 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
     let b = boundary_places(coarse.nodes(), coarse_facets, &ids, nodes.len(), p, &t, spacing);
     let fine = M::assemble(nodes, sub_cells, b.fine_facets, coarse.names().to_vec());
     let shape = linear_shape::<D, N>();
+    let elements = Cells::from_cells(D, p, shape, elements);
     let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
     Ok(Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets })
 }
@@ -397,7 +399,7 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
     let subs = simplex::sub_simplices(Shape::Triangle, p);
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; 2]> = Vec::new();
-    let (mut elements, mut sub_cells, mut owner) = (Vec::with_capacity(coarse.cells.len()), Vec::new(), Vec::new());
+    let (mut elements, mut sub_cells, mut owner) = (Cells::new(), Vec::new(), Vec::new());
     for (c, cell) in coarse.cells.iter().enumerate() {
         let before = sub_cells.len();
         match cell {
@@ -406,12 +408,12 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
                 for sub in tensor_sub_cells::<2, 4>(&el, p) {
                     sub_cells.extend(split_quad(sub, &nodes));
                 }
-                elements.push(el);
+                elements.push(Shape::Quadrilateral, &el);
             }
             PlaneCell::Triangle(tri) => {
                 let el = simplex_element::<2, 3>(c, tri, &coarse.nodes, (&lattice, &space.nodes, p), &mut ids, &mut nodes);
                 sub_cells.extend(subs.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
-                elements.push(el);
+                elements.push(Shape::Triangle, &el);
             }
         }
         owner.resize(owner.len() + sub_cells.len() - before, c);
@@ -452,21 +454,21 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
     let mut sub_hexes: Vec<(usize, [usize; 8])> = Vec::new();
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; 3]> = Vec::new();
-    let (mut elements, mut sub_cells, mut owner) = (Vec::with_capacity(coarse.cells.len()), Vec::new(), Vec::new());
+    let (mut elements, mut sub_cells, mut owner) = (Cells::new(), Vec::new(), Vec::new());
     for (c, cell) in coarse.cells.iter().enumerate() {
         let before = sub_cells.len();
         match cell {
             SolidCell::Tet(tet) => {
                 let el = simplex_element::<3, 4>(c, tet, &coarse.nodes, (&tet_lattice, &tet_space.nodes, p), &mut ids, &mut nodes);
                 sub_cells.extend(tets.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
-                elements.push(el);
+                elements.push(Shape::Tetrahedron, &el);
             }
             SolidCell::Prism(corners) => {
                 let el = keyed_element((c, corners, &coarse.nodes), (&prism_lattice, &prism_space.nodes, p), prism_key, prism_point, &mut ids, &mut nodes);
                 for s in &sub_prisms {
                     sub_cells.extend(prism_tets(s.map(|a| el[a])));
                 }
-                elements.push(el);
+                elements.push(Shape::Prism, &el);
             }
             SolidCell::Pyramid(corners) => {
                 let el = keyed_element((c, corners, &coarse.nodes), (&pyramid_lattice, &pyramid_space.nodes, p), pyramid_key, pyramid_point, &mut ids, &mut nodes);
@@ -474,12 +476,12 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
                     sub_cells.extend(pyramid_tets(s.map(|a| el[a])));
                 }
                 sub_cells.extend(pyramid_sub_tets.iter().map(|s| s.map(|a| el[a])));
-                elements.push(el);
+                elements.push(Shape::Pyramid, &el);
             }
             SolidCell::Hex(corners) => {
                 let el = tensor_element::<3, 8>(c, corners, &coarse.nodes, &t, &mut ids, &mut nodes);
                 sub_hexes.extend(tensor_sub_cells::<3, 8>(&el, p).map(|h| (c, h)));
-                elements.push(el);
+                elements.push(Shape::Hexahedron, &el);
             }
         }
         owner.resize(owner.len() + sub_cells.len() - before, c);

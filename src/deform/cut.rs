@@ -8,8 +8,8 @@
 //! at order 1): a prism or pyramid can fold while its tetrahedra do not.
 
 use super::{BoundaryPart, Q1Mesh};
-use crate::mesh::element::{Shape, Spacing};
-use crate::mesh::{CurvedMesh, MixedPlaneMesh, MixedSolidMesh, TetMesh, TriMesh};
+use crate::mesh::element::Spacing;
+use crate::mesh::{Cells, CurvedMesh, MixedPlaneMesh, MixedSolidMesh, TetMesh, TriMesh};
 use crate::quality::certify::Certifiers;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -72,9 +72,9 @@ pub struct Cut<M: Cuttable<D, N>, const D: usize, const N: usize> {
     simplices: M::Simplices,
     /// The cell each simplex was cut from.
     owner: Vec<usize>,
-    /// Each cell's kind and vertices in its kind's lattice order, for the
-    /// certifiers.
-    lattice: Vec<(Shape, Vec<usize>)>,
+    /// The cells' vertices in their kinds' lattice order, in blocks of
+    /// one kind, for the certifiers.
+    lattice: Cells,
     certifiers: Arc<Certifiers>,
 }
 
@@ -88,9 +88,8 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Cut<M, D, N> {
     pub fn new(mesh: M) -> Self {
         let (simplices, owner) = mesh.cut();
         let curved = mesh.as_curved();
-        let lattice: Vec<(Shape, Vec<usize>)> = (0..curved.cells.len()).map(|c| (curved.cell_shape(c), curved.cells[c].clone())).collect();
         let certifiers = Certifiers::new(&curved.shapes(), 1, Spacing::Equispaced).expect("order 1 of every kind");
-        Cut { mesh, simplices, owner, lattice, certifiers: Arc::new(certifiers) }
+        Cut { mesh, simplices, owner, lattice: curved.cells, certifiers: Arc::new(certifiers) }
     }
 
     /// The cells at the current positions.
@@ -120,9 +119,8 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Cut<M, D, N> {
             .into_par_iter()
             .with_min_len(256)
             .filter(|&c| {
-                let (shape, vertices) = &self.lattice[c];
-                let ctrl: Vec<[f64; D]> = vertices.iter().map(|&n| nodes[n]).collect();
-                !self.certifiers.of(*shape).is_valid(&ctrl)
+                let ctrl: Vec<[f64; D]> = self.lattice[c].iter().map(|&n| nodes[n]).collect();
+                !self.certifiers.of(self.lattice.shape(c)).is_valid(&ctrl)
             })
             .collect()
     }
@@ -179,6 +177,7 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for Cut<M, 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::element::Shape;
 
     /// A quad whose corner on the cut's diagonal is pushed in past the
     /// other diagonal folds, while both its triangles stay positive: the
@@ -226,9 +225,8 @@ mod tests {
         assert!(!cells_bad.is_empty());
         // folded, not undecided: det J takes a negative value there
         for &c in &cells_bad {
-            let (shape, vertices) = &cut.lattice[c];
-            let ctrl: Vec<[f64; 3]> = vertices.iter().map(|&n| at[n]).collect();
-            let cert = cut.certifiers.of(*shape).certify(&ctrl, &Default::default());
+            let ctrl: Vec<[f64; 3]> = cut.lattice[c].iter().map(|&n| at[n]).collect();
+            let cert = cut.certifiers.of(cut.lattice.shape(c)).certify(&ctrl, &Default::default());
             assert!(cert.min_det_upper < 0.0, "{cert:?}");
         }
         let of_bad: Vec<usize> = (0..cut.owner().len()).filter(|&t| cells_bad.contains(&cut.owner()[t])).collect();

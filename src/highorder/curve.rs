@@ -10,6 +10,7 @@
 
 use super::{check_order, Basis1d, HighOrderError, Spacing};
 use crate::mesh::element::Shape;
+use crate::mesh::Cells;
 use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, subdivide_mixed, subdivide_mixed_solid, RefineMesh, Settle, SettlePlan, Subdividable, Subdivision, ALG2_BAND};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, THIN_ASPECT, THIN_TOLERANCE};
@@ -372,7 +373,7 @@ impl Watch {
             }
         }
         let watched = (0..sub.elements.len()).filter(|&e| sub.elements[e].iter().any(|&n| on[n]));
-        let elements: Vec<(Shape, Vec<usize>)> = watched.map(|e| (sub.element_shape(e), sub.elements[e].clone())).collect();
+        let elements: Vec<(Shape, Vec<usize>)> = watched.map(|e| (sub.element_shape(e), sub.elements[e].to_vec())).collect();
         let shapes = sub.shapes();
         let mut rows = Vec::new();
         for &shape in &shapes {
@@ -1092,7 +1093,7 @@ impl<'a, M: Clone, const D: usize> BandMask<'a, M, D> {
 
     /// Doubles the band if one of the `invalid` elements has a node it
     /// held; whether it did.
-    fn widen_for<const N: usize>(&mut self, invalid: &[usize], elements: &[Vec<usize>], parts: &[BoundaryPart<D>]) -> bool
+    fn widen_for<const N: usize>(&mut self, invalid: &[usize], elements: &Cells, parts: &[BoundaryPart<D>]) -> bool
     where
         M: Subdividable<D, N>,
         RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
@@ -1365,7 +1366,7 @@ fn fine_mesh<M, const D: usize>(sub: &Subdivision<M, D>, names: &[String], spaci
         p: sub.p,
         spacing,
         nodes,
-        cells: sub.elements.clone(),
+        cells: Cells::from_cells(D, sub.p, sub.shape, &sub.elements),
         boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
         part_names: names.to_vec(),
     }

@@ -195,7 +195,7 @@ impl Layout {
             .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: mesh.facet_shape(b), order: p, nodes: b.nodes.clone() })
             .collect();
         let cells = mesh.cells.iter().enumerate();
-        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.cell_shape(c), order: p, nodes: n.clone() }));
+        elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.cell_shape(c), order: p, nodes: n.to_vec() }));
         Layout {
             physical_names,
             entities,
@@ -319,9 +319,11 @@ impl Layout {
             p: cells.first().map_or(1, |c| c.order),
             spacing: crate::mesh::element::Spacing::Equispaced,
             nodes: self.coords.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
-            // each keeps its node count, which tells its kind in a mixed
-            // mesh (`CurvedMesh::cell_shape`): `shape` is the first's
-            cells: cells.iter().map(|c| c.nodes.clone()).collect(),
+            // in blocks of their kinds: `shape` is the first's
+            cells: cells.iter().fold(crate::mesh::Cells::new(), |mut out, c| {
+                out.push(c.shape, &c.nodes);
+                out
+            }),
             boundary,
             part_names,
         };
@@ -645,7 +647,7 @@ impl CellKind {
 fn curved_cell<const D: usize>(mesh: &CurvedMesh<D>, c: usize, shape: Shape) -> Result<Vec<usize>, String> {
     let cell = mesh.cells.get(c).ok_or("fewer curved cells than input cells")?;
     match mesh.cell_shape(c) {
-        s if s == shape => Ok(cell.clone()),
+        s if s == shape => Ok(cell.to_vec()),
         s => Err(format!("its curved cell {c} is a {s:?}")),
     }
 }
@@ -833,6 +835,7 @@ pub mod tests {
                 crate::mesh::CurvedBoundary { nodes, part: 0 }
             })
             .collect();
+        let cells = crate::mesh::Cells::from_cells(2, p, Shape::Quadrilateral, cells);
         CurvedMesh { shape: Shape::Quadrilateral, p, spacing: Spacing::Equispaced, nodes, cells, boundary, part_names: vec!["wall".into()] }
     }
 
@@ -887,7 +890,7 @@ pub mod tests {
             assert_eq!(snapped, 0.0);
             let cells: Vec<&Element> = out.elements.iter().filter(|e| e.shape.dim() == 2).collect();
             for (c, e) in cells.iter().enumerate() {
-                assert_eq!((e.shape, e.order, &e.nodes), (m.cell_shape(c), p, &m.cells[c]), "cell {c}");
+                assert_eq!((e.shape, e.order, &e.nodes), (m.cell_shape(c), p, &m.cells[c].to_vec()), "cell {c}");
             }
             // the diagonal from (2, 0) to (3, 1): the second triangle's
             // edge 0 (its vertices 0 → 1), in that order
@@ -900,7 +903,9 @@ pub mod tests {
     #[test]
     fn an_input_cell_matched_to_a_curved_cell_of_another_kind_is_lost() {
         let mut m = mixed2(2);
-        m.cells.swap(1, 2);
+        let mut cells = m.cells.to_vecs();
+        cells.swap(1, 2);
+        m.cells = crate::mesh::Cells::from_cells(2, m.p, m.shape, cells);
         let (input, coarse_nodes) = mixed_input(&mixed2(2));
         let err = input.curved(&m, &coarse_nodes).unwrap_err();
         assert!(matches!(err, LayoutError::Lost { shape: Shape::Quadrilateral, .. }), "{err}");

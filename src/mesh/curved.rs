@@ -8,6 +8,7 @@
 use super::element::basis::{tensor_map, Basis1d};
 use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
 use super::element::{prism, pyramid, simplex, Shape};
+use super::blocks::Cells;
 use super::{PlaneMesh, SolidMesh};
 
 /// One boundary element: an order-`p` line (2D meshes) or quad (3D
@@ -34,10 +35,10 @@ pub struct CurvedMesh<const D: usize> {
     pub spacing: Spacing,
     /// Node coordinates.
     pub nodes: Vec<[f64; D]>,
-    /// Cells, [`Shape::num_nodes`] node indices each, in tensor order
-    /// (quads, hexes) or the simplex lattice order
-    /// ([`super::element::simplex`]).
-    pub cells: Vec<Vec<usize>>,
+    /// Cells as element blocks ([`Cells`]), [`Shape::num_nodes`] node
+    /// indices each, in tensor order (quads, hexes) or the lattice order
+    /// of their kind ([`super::element::simplex`], [`prism`], [`pyramid`]).
+    pub cells: Cells,
     /// Boundary elements (dimension `D − 1`) with their parts.
     pub boundary: Vec<CurvedBoundary>,
     /// Names of the boundary parts (physical groups of dimension `D − 1`).
@@ -45,6 +46,9 @@ pub struct CurvedMesh<const D: usize> {
 }
 
 impl<const D: usize> CurvedMesh<D> {
+    /// The dimension, for code outside the generic impl.
+    const DIM: usize = D;
+
     /// A structured mesh of `n[0] × … × n[D−1]` order-`p` cells of the unit
     /// box `[0,1]^D`, its nodes then moved by `map`. Nodes are numbered
     /// first axis fastest on the global grid of `n_d p + 1` nodes per axis,
@@ -108,9 +112,11 @@ impl<const D: usize> CurvedMesh<D> {
                 i
             })
         };
-        let cells = (0..ncells)
-            .map(|c| block(cell_index(c).map(|i| i * p), &all_axes))
-            .collect();
+        let shape = if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron };
+        let mut cells = Cells::new();
+        for c in 0..ncells {
+            cells.push(shape, &block(cell_index(c).map(|i| i * p), &all_axes));
+        }
         let mut boundary = Vec::new();
         for d in 0..D {
             let others: Vec<usize> = (0..D).filter(|&e| e != d).collect();
@@ -136,7 +142,7 @@ impl<const D: usize> CurvedMesh<D> {
         }
         let names = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
         Ok(CurvedMesh {
-            shape: if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron },
+            shape,
             p,
             spacing,
             nodes,
@@ -157,15 +163,10 @@ impl<const D: usize> CurvedMesh<D> {
         self.shape.is_simplex()
     }
 
-    /// The kind of cell `c`, told by its node count ([`Shape::with_nodes`]):
-    /// a mixed mesh holds triangles and quads, or tetrahedra and prisms. A
-    /// count no kind has (which [`Self::validate`] refuses) gives `shape`.
+    /// The kind of cell `c`, its block's: a mixed mesh holds triangles and
+    /// quads, or tetrahedra, prisms, pyramids and hexes.
     pub fn cell_shape(&self, c: usize) -> Shape {
-        let n = self.cells[c].len();
-        if n == self.shape.num_nodes(self.p) {
-            return self.shape;
-        }
-        Shape::with_nodes(D, self.p, n).unwrap_or(self.shape)
+        self.cells.shape(c)
     }
 
     /// The kind of boundary element `b`, told by its node count: a 3D
@@ -176,14 +177,9 @@ impl<const D: usize> CurvedMesh<D> {
 
     /// The kinds of cell the mesh holds, in the order of [`Shape`].
     pub fn shapes(&self) -> Vec<Shape> {
-        let mut out = vec![self.shape];
-        for c in 0..self.cells.len() {
-            let s = self.cell_shape(c);
-            if !out.contains(&s) {
-                out.push(s);
-            }
-        }
+        let mut out: Vec<Shape> = std::iter::once(self.shape).chain(self.cells.blocks().iter().map(|b| b.shape)).collect();
         out.sort();
+        out.dedup();
         out
     }
 
@@ -210,6 +206,9 @@ impl<const D: usize> CurvedMesh<D> {
         }
         if self.shape.dim() != D || !matches!(self.shape, Shape::Triangle | Shape::Quadrilateral | Shape::Tetrahedron | Shape::Hexahedron | Shape::Prism | Shape::Pyramid) {
             return Err(format!("cells of shape {:?} in a {D}D mesh", self.shape));
+        }
+        if let Some(first) = self.cells.blocks().first().filter(|b| b.shape != self.shape) {
+            return Err(format!("the mesh's kind is {:?}, its first cell's {:?}", self.shape, first.shape));
         }
         let n = self.nodes.len();
         if let Some(i) = self
@@ -288,7 +287,7 @@ impl<const D: usize> CurvedMesh<D> {
             let space = simplex::space(shape, self.p, self.spacing).expect("order checked by validate");
             let equi = simplex::space(shape, self.p, Spacing::Equispaced).expect("order checked by validate");
             let (mut values, mut grads) = (vec![0.0; space.nodes.len()], vec![[0.0; 3]; space.nodes.len()]);
-            for cell in (0..self.cells.len()).filter(|&c| self.cell_shape(c) == shape).map(|c| &self.cells[c]) {
+            for cell in self.cells.blocks().iter().filter(|b| b.shape == shape).flat_map(|b| b.cells()) {
                 for (a, &v) in cell.iter().enumerate() {
                     if std::mem::replace(&mut done[v], true) {
                         continue;
@@ -312,7 +311,7 @@ impl<const D: usize> CurvedMesh<D> {
         let t = nodes_1d(self.p, Spacing::Equispaced).expect("order checked by validate");
         let n = self.p + 1;
         let tensor = |s: Shape| matches!(s, Shape::Quadrilateral | Shape::Hexahedron);
-        for cell in (0..self.cells.len()).filter(|&c| tensor(self.cell_shape(c))).map(|c| &self.cells[c]) {
+        for cell in self.cells.blocks().iter().filter(|b| tensor(b.shape)).flat_map(|b| b.cells()) {
             let ctrl: Vec<[f64; D]> = cell.iter().map(|&v| self.nodes[v]).collect();
             for (a, &v) in cell.iter().enumerate() {
                 if std::mem::replace(&mut done[v], true) {
@@ -336,7 +335,7 @@ impl<const D: usize> CurvedMesh<D> {
     /// cell's map (basis values by `eval`, as the spaces' `eval`).
     fn resample(&self, out: &mut CurvedMesh<D>, done: &mut [bool], shape: Shape, equi: &[[f64; 3]], eval: impl Fn([f64; 3], &mut [f64], &mut [[f64; 3]])) {
         let (mut values, mut grads) = (vec![0.0; equi.len()], vec![[0.0; 3]; equi.len()]);
-        for cell in (0..self.cells.len()).filter(|&c| self.cell_shape(c) == shape).map(|c| &self.cells[c]) {
+        for cell in self.cells.blocks().iter().filter(|b| b.shape == shape).flat_map(|b| b.cells()) {
             for (a, &v) in cell.iter().enumerate() {
                 if std::mem::replace(&mut done[v], true) {
                     continue;
@@ -356,8 +355,9 @@ impl CurvedMesh<2> {
     /// order.
     pub fn from_quads<const N: usize>(m: &PlaneMesh<N>) -> Self {
         let (shape, perm) = if N == 3 { (Shape::Triangle, vec![0, 1, 2]) } else { (Shape::Quadrilateral, gmsh_quad_order(1).expect("order 1")) };
-        let cells = m.cells.iter().map(|c| from_format(&perm, c)).collect();
+        let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&perm, c)).collect();
         let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
+        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
@@ -367,9 +367,10 @@ impl CurvedMesh<2> {
     /// [`CurvedMesh::from_quads`]); its `shape` is the first cell's.
     pub fn from_mixed(m: &super::MixedPlaneMesh) -> Self {
         let quad = gmsh_quad_order(1).expect("order 1");
-        let cells = m.cells.iter().map(|c| if c.shape() == Shape::Quadrilateral { from_format(&quad, c.nodes()) } else { c.nodes().to_vec() }).collect();
+        let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| if c.shape() == Shape::Quadrilateral { from_format(&quad, c.nodes()) } else { c.nodes().to_vec() }).collect();
         let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
         let shape = m.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
+        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
@@ -381,9 +382,10 @@ impl CurvedMesh<3> {
     pub fn from_hexes<const N: usize, const K: usize>(m: &SolidMesh<N, K>) -> Self {
         let tet = N == 4;
         let (cell, face) = if tet { (vec![0, 1, 2, 3], vec![0, 1, 2]) } else { (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1")) };
-        let cells = m.cells.iter().map(|c| from_format(&cell, c)).collect();
+        let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&cell, c)).collect();
         let boundary = m.faces.iter().map(|f| CurvedBoundary { nodes: from_format(&face, &f.nodes), part: f.part }).collect();
         let shape = if tet { Shape::Tetrahedron } else { Shape::Hexahedron };
+        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
@@ -395,7 +397,7 @@ impl CurvedMesh<3> {
     /// a quad face into tensor order); its `shape` is the first cell's.
     pub fn from_mixed_solid(m: &super::MixedSolidMesh) -> Self {
         let (quad, hex, pyr) = (gmsh_quad_order(1).expect("order 1"), gmsh_hex_order(1).expect("order 1"), pyramid::gmsh_pyramid_order(1).expect("order 1"));
-        let cells = m
+        let cells: Vec<Vec<usize>> = m
             .cells
             .iter()
             .map(|c| match c {
@@ -407,6 +409,7 @@ impl CurvedMesh<3> {
         let face = |f: &[usize]| if f.len() == 4 { from_format(&quad, f) } else { f.to_vec() };
         let boundary = m.faces.iter().map(|(f, part)| CurvedBoundary { nodes: face(f), part: *part }).collect();
         let shape = m.cells.first().map_or(Shape::Prism, |c| c.shape());
+        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }

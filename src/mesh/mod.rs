@@ -4,12 +4,14 @@
 //! share. Everything above the core (io, render, the method) reads its
 //! mesh types from here, so no layer needs another one's types.
 
+pub mod blocks;
 pub mod curved;
 pub mod element;
 pub mod file;
 mod linear;
 pub mod mixed;
 
+pub use blocks::{Block, Cells};
 pub use curved::{CurvedBoundary, CurvedMesh};
 pub use linear::*;
 pub use mixed::{MixedPlaneMesh, MixedSolidMesh, PlaneCell, SolidCell};

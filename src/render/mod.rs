@@ -326,7 +326,7 @@ fn validate<const D: usize>(mesh: &CurvedMesh<D>, values: &[f64]) -> Result<(), 
     // mixed mesh
     let per_cell: Vec<usize> = Shape::ALL.iter().filter(|s| s.dim() == D).map(|s| s.num_nodes(mesh.p)).collect();
     check_elements(
-        mesh.cells.iter().map(Vec::as_slice),
+        mesh.cells.iter(),
         &per_cell,
         mesh.nodes.len(),
         "cell",

@@ -101,7 +101,7 @@ fn centre(mesh: &CurvedMesh<2>, c: usize) -> [f64; 2] {
 fn empty() -> CurvedMesh<2> {
     CurvedMesh {
         nodes: vec![],
-        cells: vec![],
+        cells: crate::mesh::Cells::new(),
         boundary: vec![],
         ..box_4x3()
     }
@@ -295,7 +295,9 @@ fn bad_inputs_are_errors_not_panics() {
     // (a quad less one node at p = 1 is a triangle, which is drawn: one
     // more node is no kind)
     let mut bad = mesh.clone();
-    bad.cells[2].push(0);
+    let mut cells = bad.cells.to_vecs();
+    cells[2].push(0);
+    bad.cells = crate::mesh::Cells::from_cells(2, bad.p, bad.shape, cells);
     assert!(matches!(
         err(&bad, &v, &opts),
         RenderError::InvalidCurvedMesh { .. }

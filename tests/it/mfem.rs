@@ -112,10 +112,10 @@ fn scramble<const D: usize>(m: &CurvedMesh<D>, seed: u64) -> CurvedMesh<D> {
     let rots = rotations::<D>();
     let mut out = m.clone();
     out.nodes = old.iter().map(|&o| m.nodes[o]).collect();
-    out.cells = order
+    let cells = order
         .iter()
-        .map(|&c| rotate(&m.cells[c], &rots[rand_below(&mut s, rots.len())], m.p).iter().map(|&v| new[v]).collect())
-        .collect();
+        .map(|&c| rotate(&m.cells[c], &rots[rand_below(&mut s, rots.len())], m.p).iter().map(|&v| new[v]).collect::<Vec<usize>>());
+    out.cells = deformesh::mesh::Cells::from_cells(D, m.p, m.shape, cells);
     for b in &mut out.boundary {
         b.nodes.iter_mut().for_each(|v| *v = new[*v]);
     }

@@ -93,10 +93,10 @@ fn curved_prisms(p: usize, seed: u64) -> CurvedMesh<3> {
         .flat_map(|hex| {
             [false, true].map(|turned| {
                 let at = |i: usize, j: usize, k: usize| if turned { hex[(p - i) + q * (p - j) + q * q * k] } else { hex[i + q * j + q * q * k] };
-                prism::lattice(p).into_iter().map(|[i, j, k]| at(i, j, k)).collect()
+                prism::lattice(p).into_iter().map(|[i, j, k]| at(i, j, k)).collect::<Vec<usize>>()
             })
-        })
-        .collect();
+        });
+    let cells = deformesh::mesh::Cells::from_cells(3, p, Shape::Prism, cells);
     let mut m = CurvedMesh { shape: Shape::Prism, cells, boundary: vec![], part_names: vec![], ..hexes };
     let mut s = seed;
     for x in &mut m.nodes {

@@ -110,6 +110,7 @@ pub(crate) fn tensor_map<const D: usize>(
 /// factorisation: one axis contracted at a time costs O(m·n^D + … + m^D·n)
 /// per component instead of O(m^D·n^D) for [`tensor_map`] at each point.
 /// Needs `m ≥ 2`.
+#[inline]
 pub(crate) fn jacobians_on_grid<const D: usize>(basis: &Basis1d, ctrl: &[[f64; D]], m: usize) -> Vec<[[f64; D]; D]> {
     let n = basis.p + 1;
     let (mut val, mut der) = (Vec::with_capacity(m * n), Vec::with_capacity(m * n));

@@ -374,7 +374,7 @@ pub mod tests {
         for cube in 0..n.iter().product() {
             let base = [cube % n[0], cube / n[0] % n[1], cube / (n[0] * n[1])];
             for turned in [false, true] {
-                let cell = lattice(p)
+                let cell: Vec<usize> = lattice(p)
                     .into_iter()
                     .zip(reference)
                     .map(|([i, j, k], x)| {
@@ -389,6 +389,7 @@ pub mod tests {
                 cells.push(cell);
             }
         }
+        let cells = crate::mesh::Cells::from_cells(3, p, Shape::Prism, cells);
         CurvedMesh { shape: Shape::Prism, p, spacing, nodes, cells, boundary: vec![], part_names: vec![] }
     }
 

@@ -12,7 +12,7 @@ use super::*;
 use crate::mesh::element::Shape;
 use crate::mesh::element::prism::tests::prism_box;
 use crate::mesh::element::{simplex, Spacing};
-use crate::mesh::HexMesh;
+use crate::mesh::{Cells, HexMesh};
 use crate::numeric::cross3;
 use crate::render::tests::{assert_close, brightness, darkest_near, decoded, pixel, WHITE};
 
@@ -233,7 +233,7 @@ fn three_quarter_view_shades_top_front_and_side_differently() {
 /// drawn face win fails one of the two.
 fn both_orders(mesh: &CurvedMesh<3>, o: &RenderOptions3) -> Vec<(RgbaImage, HexPlan)> {
     let mut reversed = mesh.clone();
-    reversed.cells.reverse();
+    reversed.cells = Cells::from_cells(3, mesh.p, mesh.shape, mesh.cells.iter().rev());
     vec![
         render_decoded(mesh, &[BLUE_VALUE, RED_VALUE], o),
         render_decoded(&reversed, &[RED_VALUE, BLUE_VALUE], o),
@@ -624,7 +624,7 @@ fn bad_inputs_are_errors_not_panics() {
     }
     let empty = CurvedMesh {
         nodes: vec![],
-        cells: vec![],
+        cells: Cells::new(),
         boundary: vec![],
         ..brick([1, 1, 1])
     };
@@ -670,7 +670,7 @@ fn edge_cases_still_render() {
     // behind a perspective eye.
     let empty = CurvedMesh {
         nodes: vec![],
-        cells: vec![],
+        cells: Cells::new(),
         boundary: vec![],
         ..brick([1, 1, 1])
     };
@@ -831,7 +831,9 @@ fn every_sampled_point_is_finite_and_on_the_face() {
 fn a_curved_mesh_with_a_bad_cell_is_an_error() {
     let mesh = bulged_block(2, [1, 1, 1]);
     let mut short = mesh.clone();
-    short.cells[0].pop();
+    let mut cells = short.cells.to_vecs();
+    cells[0].pop();
+    short.cells = Cells::from_cells(3, short.p, short.shape, cells);
     assert!(matches!(
         render_hexes(&short, &[1.0], &RenderOptions3::default()),
         Err(RenderError::InvalidCurvedMesh { .. })
@@ -891,7 +893,7 @@ fn tet_box(
                 v.swap(1, 2);
             }
             let e = |k: usize| edge(&v, k);
-            let cell = lattice
+            let cell: Vec<usize> = lattice
                 .iter()
                 .zip(reference)
                 .map(|(&[i, j, k], xi)| {
@@ -915,7 +917,7 @@ fn tet_box(
         p,
         spacing,
         nodes,
-        cells,
+        cells: Cells::from_cells(3, p, Shape::Tetrahedron, cells),
         boundary: vec![],
         part_names: vec![],
     }
@@ -1171,7 +1173,9 @@ fn bad_tet_meshes_are_errors_not_panics() {
         Err(RenderError::BadNodeIndex { cell: 2, node: 999, nodes: n }) if n == nodes
     ));
     let mut short = mesh.clone();
-    short.cells[4].pop();
+    let mut cells = short.cells.to_vecs();
+    cells[4].pop();
+    short.cells = Cells::from_cells(3, short.p, short.shape, cells);
     assert!(matches!(
         render_hexes(&short, &values, &ok),
         Err(RenderError::InvalidCurvedMesh { .. })
@@ -1197,7 +1201,7 @@ fn bad_tet_meshes_are_errors_not_panics() {
     let p = 1;
     let pyramid = CurvedMesh {
         shape: Shape::Pyramid,
-        cells: vec![(0..Shape::Pyramid.num_nodes(p)).collect()],
+        cells: Cells::from_cells(3, p, Shape::Pyramid, [(0..Shape::Pyramid.num_nodes(p)).collect::<Vec<_>>()]),
         ..tet_box(p, Spacing::Equispaced, [1, 1, 1], |x| x)
     };
     // pyramids are drawn
@@ -1480,7 +1484,7 @@ fn hex_pyramid_tets(p: usize) -> CurvedMesh<3> {
         return CurvedMesh::from_mixed_solid(&coarse);
     }
     let (s, _) = crate::refine::subdivide_mixed_solid(&coarse, p, Spacing::Equispaced).unwrap();
-    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: s.elements.clone(), boundary: vec![], part_names: vec![] }
+    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: Cells::from_cells(3, p, Shape::Hexahedron, &s.elements), boundary: vec![], part_names: vec![] }
 }
 
 /// A mesh of hexes, a pyramid and tets is drawn cell by cell: its surface

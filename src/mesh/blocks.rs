@@ -1,0 +1,254 @@
+//! The cells of a mesh as element blocks: runs of cells of one kind, each
+//! block one flat array of node indices (MFEM's and Gmsh's element blocks,
+//! VTK's connectivity). A mesh of any mix of kinds is a list of blocks in
+//! the file's order, so cell `c` is still the file's element `c`, and a
+//! kernel takes a block's cells as fixed-width chunks of one kind — the
+//! kind is looked up once per block, not per cell.
+
+use std::ops::{Index, IndexMut};
+
+use super::element::Shape;
+
+/// A run of cells of one kind at one order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// The cells' kind.
+    pub shape: Shape,
+    /// Nodes per cell ([`Shape::num_nodes`] at the mesh's order; a count no
+    /// kind has is kept as given, for [`super::CurvedMesh::validate`] to
+    /// refuse with the cell's number).
+    pub width: usize,
+    /// `width` node indices per cell, cell after cell.
+    pub nodes: Vec<usize>,
+}
+
+impl Block {
+    /// How many cells the block holds.
+    pub fn len(&self) -> usize {
+        self.nodes.len() / self.width.max(1)
+    }
+
+    /// Whether the block holds no cell.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Its cells' nodes, one slice per cell.
+    pub fn cells(&self) -> std::slice::ChunksExact<'_, usize> {
+        self.nodes.chunks_exact(self.width.max(1))
+    }
+}
+
+/// The cells of a mesh: element blocks in order, indexed as one list.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Cells {
+    blocks: Vec<Block>,
+    /// The index of each block's first cell, and the total after the last.
+    starts: Vec<usize>,
+}
+
+impl Cells {
+    /// No cells.
+    pub fn new() -> Cells {
+        Cells { blocks: Vec::new(), starts: vec![0] }
+    }
+
+    /// Cells of dimension `dim` at order `p`, each kind told by its node
+    /// count ([`Shape::with_nodes`]; a count no kind has gets `fallback`),
+    /// consecutive cells of one kind in one block.
+    pub fn from_cells<C: AsRef<[usize]>>(dim: usize, p: usize, fallback: Shape, cells: impl IntoIterator<Item = C>) -> Cells {
+        let mut out = Cells::new();
+        for c in cells {
+            let c = c.as_ref();
+            out.push(Shape::with_nodes(dim, p, c.len()).unwrap_or(fallback), c);
+        }
+        out
+    }
+
+    /// Appends a cell of `shape`: to the last block if it is of that kind
+    /// and width, else in a new block.
+    pub fn push(&mut self, shape: Shape, nodes: &[usize]) {
+        match self.blocks.last_mut() {
+            Some(b) if b.shape == shape && b.width == nodes.len() => b.nodes.extend_from_slice(nodes),
+            _ => {
+                self.blocks.push(Block { shape, width: nodes.len(), nodes: nodes.to_vec() });
+                let last = *self.starts.last().expect("starts holds the total");
+                self.starts.push(last);
+            }
+        }
+        *self.starts.last_mut().expect("starts holds the total") += 1;
+    }
+
+    /// The blocks, in order.
+    pub fn blocks(&self) -> &[Block] {
+        &self.blocks
+    }
+
+    /// How many cells there are.
+    pub fn len(&self) -> usize {
+        *self.starts.last().unwrap_or(&0)
+    }
+
+    /// Whether there is no cell.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The block holding cell `c` and `c`'s place in it. A single block
+    /// (every mesh of one kind) is found without a search.
+    fn locate(&self, c: usize) -> (usize, usize) {
+        if self.blocks.len() == 1 {
+            return (0, c);
+        }
+        let b = self.starts.partition_point(|&s| s <= c) - 1;
+        (b, c - self.starts[b])
+    }
+
+    /// Cell `c`'s nodes, if there is such a cell.
+    pub fn get(&self, c: usize) -> Option<&[usize]> {
+        (c < self.len()).then(|| &self[c])
+    }
+
+    /// The first cell's nodes.
+    pub fn first(&self) -> Option<&[usize]> {
+        self.get(0)
+    }
+
+    /// The kind of cell `c`.
+    pub fn shape(&self, c: usize) -> Shape {
+        self.blocks[self.locate(c).0].shape
+    }
+
+    /// The cells' nodes in order, one slice per cell.
+    pub fn iter(&self) -> impl DoubleEndedIterator<Item = &[usize]> + ExactSizeIterator + Clone + '_ {
+        // every block's chunks; the sizes are known, so the chain is
+        // wrapped to say so
+        Exact { inner: self.blocks.iter().flat_map(Block::cells), left: self.len() }
+    }
+
+    /// Each cell's kind and nodes, in order.
+    pub fn with_shapes(&self) -> impl Iterator<Item = (Shape, &[usize])> + '_ {
+        self.blocks.iter().flat_map(|b| b.cells().map(move |c| (b.shape, c)))
+    }
+
+    /// Each cell's nodes as its own vector, in order (to edit the list
+    /// and rebuild it with [`Cells::from_cells`]).
+    pub fn to_vecs(&self) -> Vec<Vec<usize>> {
+        self.iter().map(<[usize]>::to_vec).collect()
+    }
+
+    /// Renumbers every node reference by `f`.
+    pub fn map_nodes(&mut self, mut f: impl FnMut(usize) -> usize) {
+        for b in &mut self.blocks {
+            b.nodes.iter_mut().for_each(|v| *v = f(*v));
+        }
+    }
+}
+
+impl Index<usize> for Cells {
+    type Output = [usize];
+    fn index(&self, c: usize) -> &[usize] {
+        let (b, i) = self.locate(c);
+        let w = self.blocks[b].width;
+        &self.blocks[b].nodes[i * w..(i + 1) * w]
+    }
+}
+
+impl IndexMut<usize> for Cells {
+    fn index_mut(&mut self, c: usize) -> &mut [usize] {
+        let (b, i) = self.locate(c);
+        let w = self.blocks[b].width;
+        &mut self.blocks[b].nodes[i * w..(i + 1) * w]
+    }
+}
+
+impl<'a> IntoIterator for &'a Cells {
+    type Item = &'a [usize];
+    type IntoIter = Box<dyn Iterator<Item = &'a [usize]> + 'a>;
+    fn into_iter(self) -> Self::IntoIter {
+        Box::new(self.iter())
+    }
+}
+
+/// An iterator of known length (a chain of the blocks' chunks).
+#[derive(Clone)]
+struct Exact<I> {
+    inner: I,
+    left: usize,
+}
+
+impl<I: Iterator> Iterator for Exact<I> {
+    type Item = I::Item;
+    fn next(&mut self) -> Option<I::Item> {
+        let x = self.inner.next();
+        self.left -= x.is_some() as usize;
+        x
+    }
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.left, Some(self.left))
+    }
+}
+
+impl<I: DoubleEndedIterator> DoubleEndedIterator for Exact<I> {
+    fn next_back(&mut self) -> Option<I::Item> {
+        let x = self.inner.next_back();
+        self.left -= x.is_some() as usize;
+        x
+    }
+}
+
+impl<I: Iterator> ExactSizeIterator for Exact<I> {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_of_two_kinds_keep_their_order_in_runs() {
+        // quad, quad, triangle, quad at order 1: three blocks
+        let cells = Cells::from_cells(2, 1, Shape::Quadrilateral, [vec![0, 1, 2, 3], vec![1, 4, 5, 2], vec![4, 6, 5], vec![6, 7, 8, 5]]);
+        assert_eq!(cells.len(), 4);
+        assert_eq!(cells.blocks().iter().map(|b| (b.shape, b.len())).collect::<Vec<_>>(), [(Shape::Quadrilateral, 2), (Shape::Triangle, 1), (Shape::Quadrilateral, 1)]);
+        assert_eq!(&cells[2], &[4, 6, 5]);
+        assert_eq!(&cells[3], &[6, 7, 8, 5]);
+        assert_eq!(cells.shape(1), Shape::Quadrilateral);
+        assert_eq!(cells.shape(2), Shape::Triangle);
+        assert_eq!(cells.iter().len(), 4);
+        assert_eq!(cells.iter().rev().next(), Some(&[6, 7, 8, 5][..]));
+        assert_eq!(cells.iter().map(<[usize]>::len).collect::<Vec<_>>(), [4, 4, 3, 4]);
+    }
+
+    proptest::proptest! {
+        /// Any run of kinds: the blocks index, iterate (both ways) and
+        /// tell kinds as the list of vectors they were made from does.
+        #[test]
+        fn blocks_index_as_the_list_they_were_made_of(kinds in proptest::collection::vec(0usize..4, 0..40), p in 1usize..4) {
+            let shapes = [Shape::Tetrahedron, Shape::Prism, Shape::Pyramid, Shape::Hexahedron];
+            let mut next = 0;
+            let list: Vec<(Shape, Vec<usize>)> = kinds.iter().map(|&k| {
+                let n = shapes[k].num_nodes(p);
+                next += n;
+                (shapes[k], (next - n..next).collect())
+            }).collect();
+            let cells = Cells::from_cells(3, p, Shape::Hexahedron, list.iter().map(|c| &c.1));
+            proptest::prop_assert_eq!(cells.len(), list.len());
+            let runs = 1 + kinds.windows(2).filter(|w| w[0] != w[1]).count();
+            proptest::prop_assert_eq!(cells.blocks().len(), if kinds.is_empty() { 0 } else { runs });
+            for (c, (shape, nodes)) in list.iter().enumerate() {
+                proptest::prop_assert_eq!(&cells[c], &nodes[..]);
+                proptest::prop_assert_eq!(cells.shape(c), *shape);
+            }
+            proptest::prop_assert!(cells.iter().eq(list.iter().map(|c| &c.1[..])));
+            proptest::prop_assert!(cells.iter().rev().eq(list.iter().rev().map(|c| &c.1[..])));
+            proptest::prop_assert!(cells.with_shapes().eq(list.iter().map(|c| (c.0, &c.1[..]))));
+            proptest::prop_assert_eq!(cells.get(list.len()), None);
+        }
+    }
+
+    #[test]
+    fn a_count_no_kind_has_keeps_its_width() {
+        let cells = Cells::from_cells(2, 2, Shape::Quadrilateral, [vec![0; 9], vec![0; 7]]);
+        assert_eq!(cells[1].len(), 7);
+        assert_eq!(cells.blocks().len(), 2);
+    }
+}
