@@ -292,6 +292,61 @@ pub(crate) mod tests {
         }
     }
 
+    /// A seeded sequence (a 64-bit LCG) of numbers in [-1, 1), the
+    /// certifiers' tests' random elements.
+    pub(crate) fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    /// The last valid and first invalid of `make(k 2^-28)`, k = 0..2^28,
+    /// by bisection on `valid`.
+    pub(crate) fn threshold<T>(make: impl Fn(f64) -> T, valid: impl Fn(&T) -> bool) -> (T, T) {
+        let step = 2f64.powi(-28);
+        let (mut lo, mut hi) = (0u64, 1u64 << 28);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if valid(&make(mid as f64 * step)) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (make(lo as f64 * step), make(hi as f64 * step))
+    }
+
+    /// The certificate of `q` (by `certify`, with `is_valid` the quick
+    /// verdict) and of its moved copies: translated by 1e6 (exact for
+    /// dyadic `q`: the same certificate), scaled by 2^-20 (exact: bounds
+    /// scaled exactly, scaled Jacobian the same) and by 1e-6 (the same
+    /// verdicts, the bounds scaled to 1e-9 of themselves or 1e-14 of the
+    /// element's max det J, the scaled Jacobian to 1e-12).
+    pub(crate) fn check_moves<const D: usize>(certify: impl Fn(&[[f64; D]]) -> certify::Certificate, is_valid: impl Fn(&[[f64; D]]) -> bool, q: &[[f64; D]], dyadic: bool) -> certify::Certificate {
+        let base = certify(q);
+        let map = |f: &dyn Fn(f64) -> f64| q.iter().map(|c| c.map(f)).collect::<Vec<[f64; D]>>();
+        if dyadic {
+            let moved = map(&|x| x + 1e6);
+            assert_eq!(certify(&moved), base);
+            assert_eq!(is_valid(&moved), is_valid(q));
+        }
+        let k = 2f64.powi(-20 * D as i32);
+        let c2 = certify(&map(&|x| x * 2f64.powi(-20)));
+        assert_eq!((c2.min_det_lower, c2.min_det_upper, c2.max_det, c2.valid), (base.min_det_lower * k, base.min_det_upper * k, base.max_det * k, base.valid));
+        assert_eq!(c2.min_scaled_jacobian, base.min_scaled_jacobian);
+        let small = map(&|x| x * 1e-6);
+        let cs = certify(&small);
+        let k = 1e-6f64.powi(D as i32);
+        assert_eq!((cs.valid, cs.min_det_upper < 0.0, is_valid(&small)), (base.valid, base.min_det_upper < 0.0, is_valid(q)), "{cs:?} {base:?}");
+        // scaling by 1e-6 rounds the coordinates: det J moves by ~1e-16 of
+        // its size, which is more than 1e-9 of a bound near 0
+        let tol = |x: f64| 1e-9 * (x * k).abs() + 1e-14 * (base.max_det * k).abs();
+        assert!((cs.min_det_lower - base.min_det_lower * k).abs() <= tol(base.min_det_lower), "{cs:?} {base:?}");
+        assert!((cs.min_det_upper - base.min_det_upper * k).abs() <= tol(base.min_det_upper), "{cs:?} {base:?}");
+        assert!((cs.max_det - base.max_det * k).abs() <= tol(base.max_det), "{cs:?} {base:?}");
+        assert!((cs.min_scaled_jacobian - base.min_scaled_jacobian).abs() <= 1e-12, "{cs:?} {base:?}");
+        base
+    }
+
     /// The unit cube in node order.
     pub(crate) fn unit_cube() -> [Point3; 8] {
         std::array::from_fn(|n| [[0.0, 1.0, 1.0, 0.0][n % 4], [0.0, 0.0, 1.0, 1.0][n % 4], (n / 4) as f64])

@@ -309,6 +309,15 @@ impl Default for CertifyOptions {
 }
 
 impl CertifyOptions {
+    /// Points per direction of the sampling grid at order `p`.
+    pub(crate) fn sample_count(&self, p: usize) -> usize {
+        if self.samples >= 2 {
+            self.samples
+        } else {
+            3 * p + 1
+        }
+    }
+
     /// Each element's bracket when a whole mesh is certified: to 1e-3 of
     /// its minimum, then [`extreme_candidates`] alone to the default 1e-7.
     /// The extra digits on every element cost most of the splits
@@ -393,6 +402,17 @@ impl Certificate {
 /// largest coefficient of a minimum (at the rounding level of det J's
 /// coefficients), so a minimum of exactly 0 is not refined for ever.
 pub(crate) const ZERO_FLOOR: f64 = 1e-16;
+
+/// A certificate's two brackets, of min det J and of min −det J (whose
+/// negative bounds max det J), by a kind's branch and bound `bound_min`
+/// over det J's coefficients `det` and `neg` (within `err`), each to
+/// `opts`' tolerance and split budget: `(min, neg_min, splits)`.
+pub(crate) fn brackets<C>(det: C, neg: C, err: f64, opts: &CertifyOptions, bound_min: impl Fn(C, f64, Goal) -> (f64, f64, usize)) -> ((f64, f64), (f64, f64), usize) {
+    let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
+    let (lo, up, s1) = bound_min(det, err, goal);
+    let (neg_lo, neg_up, s2) = bound_min(neg, err, goal);
+    ((lo, up), (neg_lo, neg_up), s1 + s2)
+}
 
 /// What the branch and bound of [`bound_min`] is after.
 #[derive(Clone, Copy)]
@@ -514,18 +534,15 @@ impl Certifier {
 
     /// The certificate from det J (`parts`, its rounding bound and scale).
     fn bracket<const D: usize>(&self, ctrl: &[[f64; D]], (parts, err, s): (&DetParts, f64, f64), opts: &CertifyOptions) -> Certificate {
-        let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
-        let (lo, up, s1) = bound_min(&parts.det, D, err, goal);
-        let (neg_lo, neg_up, s2) = bound_min(&parts.det.neg(), D, err, goal);
+        let (min, neg, splits) = brackets(&parts.det, &parts.det.neg(), err, opts, |c, e, g| bound_min(c, D, e, g));
         let (centre, _) = normalise(ctrl);
         let moved: Vec<[f64; D]> = ctrl.iter().map(|c| std::array::from_fn(|r| (c[r] - centre[r]) / s)).collect();
-        let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
         let (mut min_det, mut min_sj) = (f64::INFINITY, f64::INFINITY);
-        for j in jacobians_on_grid(&self.basis, &moved, m) {
+        for j in jacobians_on_grid(&self.basis, &moved, opts.sample_count(self.p)) {
             min_det = min_det.min(crate::mesh::element::basis::det(&j));
             min_sj = min_sj.min(scaled_det(&j));
         }
-        Certificate::of_normalised(D, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
+        Certificate::of_normalised(D, s, min, neg, (min_det, min_sj), splits)
     }
 }
 
@@ -693,16 +710,12 @@ impl Certifiers {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quality::tests::{lcg, threshold};
     use crate::lsfem::q1_eval;
     use crate::mesh::element::basis::{det, reference_nodes, tensor_map};
     use crate::mesh::{HexMesh, Point3};
     use crate::quality::tests::{unit_cube, Rng};
 
-    /// A deterministic pseudo-random sequence in [-1, 1].
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
 
     fn curved_quad(p: usize, s: Spacing, amp: f64, seed: u64) -> Vec<[f64; 2]> {
         let mut seed = seed;
@@ -866,22 +879,6 @@ mod tests {
     /// The same quad as a p = 2 hex of unit height (det J is unchanged).
     fn extruded(q: &[[f64; 2]]) -> Vec<[f64; 3]> {
         (0..3).flat_map(|k| q.iter().map(move |&[x, y]| [x, y, k as f64 * 0.5])).collect()
-    }
-
-    /// The last valid and first invalid of `make(k 2^-28)`, k = 0..2^28,
-    /// by bisection on `valid`.
-    fn threshold<T>(make: impl Fn(f64) -> T, valid: impl Fn(&T) -> bool) -> (T, T) {
-        let step = 2f64.powi(-28);
-        let (mut lo, mut hi) = (0u64, 1u64 << 28);
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if valid(&make(mid as f64 * step)) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        (make(lo as f64 * step), make(hi as f64 * step))
     }
 
     /// A barely valid and a barely invalid element (min det J ≈ ±4e-9 of

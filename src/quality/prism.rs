@@ -53,7 +53,7 @@ use std::cmp::Ordering;
 
 use smallvec::{smallvec, SmallVec};
 
-use super::certify::{gamma, normalise, Certificate, CertifyOptions, Conversion as LineConversion, Goal, U};
+use super::certify::{brackets, gamma, normalise, Certificate, CertifyOptions, Conversion as LineConversion, Goal, U};
 use super::simplex::{constant_jacobian, Conversion as TriConversion};
 use crate::mesh::element::basis::det;
 use crate::mesh::element::{check_order, HighOrderError};
@@ -382,11 +382,7 @@ impl PrismCertifier {
     /// If `D` is not 3 or `ctrl` has the wrong length.
     pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
         let (parts, err, s) = self.det_j(ctrl);
-        let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
-        let neg: Coef = parts.det.iter().map(|c| -c).collect();
-        let (lo, up, s1) = self.bound_min(parts.det, err, goal);
-        let (neg_lo, neg_up, s2) = self.bound_min(neg, err, goal);
-        let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
+        let m = opts.sample_count(self.p);
         let (min_det, min_sj) = match constant_jacobian(&parts.col, parts.deriv_max) {
             // a straight-sided prism: its J, hence both figures, is the
             // same at every sample
@@ -394,7 +390,9 @@ impl PrismCertifier {
             None if m == self.samples.m => self.sample(&parts.col, &self.samples),
             None => self.sample(&parts.col, &Samples::new(self.p, m)),
         };
-        Certificate::of_normalised(3, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
+        let neg: Coef = parts.det.iter().map(|c| -c).collect();
+        let (min, neg, splits) = brackets(parts.det, neg, err, opts, |c, e, g| self.bound_min(c, e, g));
+        Certificate::of_normalised(3, s, min, neg, (min_det, min_sj), splits)
     }
 
     /// `(min det J, min scaled Jacobian)` of the normalised element over
@@ -448,15 +446,11 @@ pub(crate) fn scaled_jacobian(j: &[[f64; 3]; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quality::tests::{lcg, threshold};
     use crate::numeric::simplex_bezier::coef_bounds;
     use crate::mesh::element::prism::{space, PrismSpace};
     use crate::mesh::element::Spacing;
 
-    /// A deterministic pseudo-random sequence in [-1, 1].
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
 
     const SPACINGS: [Spacing; 2] = [Spacing::Equispaced, Spacing::GaussLobatto];
 
@@ -780,52 +774,9 @@ mod tests {
         q
     }
 
-    /// The last valid and first invalid of `make(k 2^-28)`, k = 0..2^28,
-    /// by bisection on `valid`.
-    fn threshold<T>(make: impl Fn(f64) -> T, valid: impl Fn(&T) -> bool) -> (T, T) {
-        let step = 2f64.powi(-28);
-        let (mut lo, mut hi) = (0u64, 1u64 << 28);
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if valid(&make(mid as f64 * step)) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        (make(lo as f64 * step), make(hi as f64 * step))
-    }
-
-    /// The certificate of `q` and of its moved copies: translated by 1e6
-    /// (exact for dyadic `q`: the same certificate), scaled by 2^-20 (exact:
-    /// bounds scaled exactly, scaled Jacobian the same) and by 1e-6 (the
-    /// same verdicts, the bounds scaled to 1e-9 of themselves or 1e-14 of
-    /// the element's max det J, the scaled Jacobian to 1e-12).
+    /// [`crate::quality::tests::check_moves`] with `cert`.
     fn check_moves(cert: &PrismCertifier, q: &[[f64; 3]], dyadic: bool) -> Certificate {
-        let opts = CertifyOptions::default();
-        let base = cert.certify(q, &opts);
-        let map = |f: &dyn Fn(f64) -> f64| q.iter().map(|c| c.map(f)).collect::<Vec<[f64; 3]>>();
-        if dyadic {
-            let moved = map(&|x| x + 1e6);
-            assert_eq!(cert.certify(&moved, &opts), base);
-            assert_eq!(cert.is_valid(&moved), cert.is_valid(q));
-        }
-        let k = 2f64.powi(-60);
-        let c2 = cert.certify(&map(&|x| x * 2f64.powi(-20)), &opts);
-        assert_eq!((c2.min_det_lower, c2.min_det_upper, c2.max_det, c2.valid), (base.min_det_lower * k, base.min_det_upper * k, base.max_det * k, base.valid));
-        assert_eq!(c2.min_scaled_jacobian, base.min_scaled_jacobian);
-        let small = map(&|x| x * 1e-6);
-        let cs = cert.certify(&small, &opts);
-        let k = 1e-18;
-        assert_eq!((cs.valid, cs.min_det_upper < 0.0, cert.is_valid(&small)), (base.valid, base.min_det_upper < 0.0, cert.is_valid(q)), "{cs:?} {base:?}");
-        // scaling by 1e-6 rounds the coordinates: det J moves by ~1e-16 of
-        // its size, which is more than 1e-9 of a bound near 0
-        let tol = |x: f64| 1e-9 * (x * k).abs() + 1e-14 * (base.max_det * k).abs();
-        assert!((cs.min_det_lower - base.min_det_lower * k).abs() <= tol(base.min_det_lower), "{cs:?} {base:?}");
-        assert!((cs.min_det_upper - base.min_det_upper * k).abs() <= tol(base.min_det_upper), "{cs:?} {base:?}");
-        assert!((cs.max_det - base.max_det * k).abs() <= tol(base.max_det), "{cs:?} {base:?}");
-        assert!((cs.min_scaled_jacobian - base.min_scaled_jacobian).abs() <= 1e-12, "{cs:?} {base:?}");
-        base
+        crate::quality::tests::check_moves(|q| cert.certify(q, &CertifyOptions::default()), |q| cert.is_valid(q), q, dyadic)
     }
 
     /// Random curved prisms (on a dyadic grid) and a barely valid and a

@@ -37,7 +37,7 @@
 //! hex's measure): 1 for a right pyramid on a square at every point, at
 //! any height. Samples run over the cube with `c < 1`.
 
-use super::certify::{bound_min, det3, gamma, normalise, Certificate, CertifyOptions, Goal, U};
+use super::certify::{bound_min, brackets, det3, gamma, normalise, Certificate, CertifyOptions, Goal, U};
 use crate::mesh::element::basis::{det, scaled_det};
 use crate::mesh::element::pyramid::{self, PyramidSpace};
 use crate::mesh::element::{HighOrderError, Spacing};
@@ -246,12 +246,9 @@ impl PyramidCertifier {
     /// If `D` is not 3 or `ctrl` has the wrong length.
     pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
         let (det_j, err, col, s) = self.det_j(ctrl);
-        let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
-        let (lo, up, s1) = bound_min(&det_j, 3, err, goal);
-        let (neg_lo, neg_up, s2) = bound_min(&det_j.neg(), 3, err, goal);
-        let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
+        let (min, neg, splits) = brackets(&det_j, &det_j.neg(), err, opts, |c, e, g| bound_min(c, 3, e, g));
         let (mut min_det, mut min_sj) = (f64::INFINITY, f64::INFINITY);
-        for [a, b, c] in sample_points(m) {
+        for [a, b, c] in sample_points(opts.sample_count(self.p)) {
             let at = |k: usize, r: usize| col[k][r].eval([a, b, c]);
             // columns ∂x/∂x, ∂x/∂y and ∂x/∂z = ∂x/∂c + (a − ½) ∂x/∂x + (b − ½) ∂x/∂y
             let j: [[f64; 3]; 3] = std::array::from_fn(|r| {
@@ -261,7 +258,7 @@ impl PyramidCertifier {
             min_det = min_det.min(det(&j));
             min_sj = min_sj.min(scaled_det(&j));
         }
-        Certificate::of_normalised(3, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
+        Certificate::of_normalised(3, s, min, neg, (min_det, min_sj), splits)
     }
 }
 
@@ -300,12 +297,8 @@ fn residual(space: &PyramidSpace) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quality::tests::lcg;
 
-    /// A deterministic pseudo-random number in [−1, 1].
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
 
     /// The reference nodes through an affine map `M x + t` and a bend,
     /// plus noise of amplitude `amp`.

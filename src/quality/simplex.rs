@@ -25,7 +25,7 @@
 
 use smallvec::{smallvec, SmallVec};
 
-use super::certify::{gamma, normalise, Certificate, CertifyOptions, Goal, U};
+use super::certify::{brackets, gamma, normalise, Certificate, CertifyOptions, Goal, U};
 use crate::mesh::element::basis::det;
 use crate::mesh::element::{check_order, HighOrderError, Shape};
 use crate::numeric::bezier::invert;
@@ -378,18 +378,15 @@ impl SimplexCertifier {
     /// If `D` is not the shape's dimension or `ctrl` has the wrong length.
     pub fn certify<const D: usize>(&self, ctrl: &[[f64; D]], opts: &CertifyOptions) -> Certificate {
         let (parts, err, s) = self.det_j(ctrl);
-        let goal = Goal::Bracket { rel_tol: opts.rel_tol, max_splits: opts.max_splits };
-        let neg: Coef = parts.det.iter().map(|c| -c).collect();
-        let (lo, up, s1) = self.bound_min(parts.det, err, goal);
-        let (neg_lo, neg_up, s2) = self.bound_min(neg, err, goal);
-        let m = if opts.samples >= 2 { opts.samples } else { 3 * self.p + 1 };
         let (min_det, min_sj) = match constant_jacobian(&parts.col, parts.deriv_max) {
             // a straight-sided element (most of a mesh curved at its walls):
             // its J, hence both figures, is the same at every sample
             Some(j) => (det(&j), scaled_jacobian(&j)),
-            None => self.sample(&parts.col, m),
+            None => self.sample(&parts.col, opts.sample_count(self.p)),
         };
-        Certificate::of_normalised(D, s, (lo, up), (neg_lo, neg_up), (min_det, min_sj), s1 + s2)
+        let neg: Coef = parts.det.iter().map(|c| -c).collect();
+        let (min, neg, splits) = brackets(parts.det, neg, err, opts, |c, e, g| self.bound_min(c, e, g));
+        Certificate::of_normalised(D, s, min, neg, (min_det, min_sj), splits)
     }
 
     /// `(min det J, min scaled Jacobian)` of the normalised element over
@@ -520,13 +517,9 @@ pub fn equispaced_nodes(shape: Shape, p: usize) -> Vec<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quality::tests::{lcg, threshold};
     use crate::numeric::simplex_bezier::coef_bounds;
 
-    /// A deterministic pseudo-random sequence in [-1, 1].
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
 
     const SHAPES: [Shape; 2] = [Shape::Triangle, Shape::Tetrahedron];
 
@@ -878,47 +871,9 @@ mod tests {
         q
     }
 
-    /// The last valid and first invalid of `make(k 2^-28)`, k = 0..2^28,
-    /// by bisection on `valid`.
-    fn threshold<T>(make: impl Fn(f64) -> T, valid: impl Fn(&T) -> bool) -> (T, T) {
-        let step = 2f64.powi(-28);
-        let (mut lo, mut hi) = (0u64, 1u64 << 28);
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if valid(&make(mid as f64 * step)) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        (make(lo as f64 * step), make(hi as f64 * step))
-    }
-
-    /// The certificate of `q` and of its moved copies: translated by 1e6
-    /// (exact for dyadic `q`: the same certificate), scaled by 2^-20 (exact:
-    /// bounds scaled exactly) and by 1e-6 (the same verdicts, the lower
-    /// bound scaled to 1e-9 of itself or 1e-14 of the element's max det J).
+    /// [`crate::quality::tests::check_moves`] with `cert`.
     fn check_moves<const D: usize>(cert: &SimplexCertifier, q: &[[f64; D]], dyadic: bool) -> Certificate {
-        let opts = CertifyOptions::default();
-        let base = cert.certify(q, &opts);
-        let map = |f: &dyn Fn(f64) -> f64| q.iter().map(|c| c.map(f)).collect::<Vec<[f64; D]>>();
-        if dyadic {
-            let moved = map(&|x| x + 1e6);
-            assert_eq!(cert.certify(&moved, &opts), base);
-            assert_eq!(cert.is_valid(&moved), cert.is_valid(q));
-        }
-        let k = 2f64.powi(-20 * D as i32);
-        let c2 = cert.certify(&map(&|x| x * 2f64.powi(-20)), &opts);
-        assert_eq!((c2.min_det_lower, c2.min_det_upper, c2.valid), (base.min_det_lower * k, base.min_det_upper * k, base.valid));
-        let small = map(&|x| x * 1e-6);
-        let cs = cert.certify(&small, &opts);
-        let k = 1e-6f64.powi(D as i32);
-        assert_eq!((cs.valid, cs.min_det_upper < 0.0, cert.is_valid(&small)), (base.valid, base.min_det_upper < 0.0, cert.is_valid(q)), "{cs:?} {base:?}");
-        // scaling by 1e-6 rounds the coordinates: det J moves by ~1e-16 of
-        // its size, which is more than 1e-9 of a bound near 0
-        let tol = 1e-9 * (base.min_det_lower * k).abs() + 1e-14 * (base.max_det * k).abs();
-        assert!((cs.min_det_lower - base.min_det_lower * k).abs() <= tol, "{cs:?} {base:?}");
-        base
+        crate::quality::tests::check_moves(|q| cert.certify(q, &CertifyOptions::default()), |q| cert.is_valid(q), q, dyadic)
     }
 
     /// Random curved elements (on a dyadic grid) and a barely valid and a
