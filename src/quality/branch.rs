@@ -56,6 +56,12 @@ impl<P> Ord for Item<P> {
     }
 }
 
+/// The least of the coefficients at `vertices` (the pieces' corners,
+/// where a Bernstein polynomial takes its coefficient's value).
+pub(super) fn least_at(coef: &[f64], vertices: &[usize]) -> f64 {
+    vertices.iter().fold(f64::INFINITY, |m, &v| m.min(coef[v]))
+}
+
 fn least(coef: &[f64]) -> f64 {
     coef.iter().fold(f64::INFINITY, |m, &c| m.min(c))
 }

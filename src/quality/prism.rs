@@ -145,7 +145,7 @@ impl super::branch::Piece for Piece {
         &self.coef
     }
     fn least_vertex(&self, cx: &PrismCertifier) -> f64 {
-        cx.min_vertex(&self.coef)
+        super::branch::least_at(&self.coef, &cx.det_vertices)
     }
     fn cut(self, cx: &PrismCertifier, _: Goal) -> (SmallVec<[Piece; 8]>, usize) {
         (cx.bisect(&self).into_iter().collect(), 1)
@@ -300,11 +300,6 @@ impl PrismCertifier {
         // min and max would skip: no bound at all then
         let err = if parts.det.iter().all(|c| c.is_finite()) { parts.error_bound(self.p, &self.tri_conv, &self.line_conv) } else { f64::INFINITY };
         (parts, err, s)
-    }
-
-    /// The smallest corner coefficient: a value the polynomial takes.
-    fn min_vertex(&self, coef: &[f64]) -> f64 {
-        self.det_vertices.iter().fold(f64::INFINITY, |m, &v| m.min(coef[v]))
     }
 
     /// The two halves of a piece: cut across the triangle (its longest

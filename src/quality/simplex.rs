@@ -193,7 +193,7 @@ impl super::branch::Piece for Piece {
         &self.coef
     }
     fn least_vertex(&self, cx: &SimplexCertifier) -> f64 {
-        cx.min_vertex(&self.coef)
+        super::branch::least_at(&self.coef, &cx.det_vertices)
     }
     fn cut(self, cx: &SimplexCertifier, _: Goal) -> (SmallVec<[Piece; 8]>, usize) {
         (cx.bisect(&self).into_iter().collect(), 1)
@@ -319,11 +319,6 @@ impl SimplexCertifier {
         };
         let k = mg.roundings() + 1 + mc.roundings() + 2;
         (triple(col, -1.0), triple(abs, 1.0), k)
-    }
-
-    /// The smallest vertex coefficient: a value the polynomial takes.
-    fn min_vertex(&self, coef: &[f64]) -> f64 {
-        self.det_vertices.iter().fold(f64::INFINITY, |m, &v| m.min(coef[v]))
     }
 
     /// The two halves of a piece, bisecting its longest reference edge
