@@ -250,5 +250,10 @@ mod tests {
         let cells = Cells::from_cells(2, 2, Shape::Quadrilateral, [vec![0; 9], vec![0; 7]]);
         assert_eq!(cells[1].len(), 7);
         assert_eq!(cells.blocks().len(), 2);
+        // a cell of no nodes is refused by the mesh's validation
+        let mut m = crate::mesh::CurvedMesh::<2>::structured(2, crate::mesh::element::Spacing::Equispaced, [1, 1], |x| x).unwrap();
+        m.cells = Cells::from_cells(2, 2, Shape::Quadrilateral, [vec![0; 9], vec![]]);
+        assert_eq!(m.validate(), Err("a cell has no nodes".to_string()));
+        assert_eq!(m.cells.len(), 2);
     }
 }

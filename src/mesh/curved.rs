@@ -221,6 +221,11 @@ impl<const D: usize> CurvedMesh<D> {
                 self.nodes[i]
             ));
         }
+        // (a block of cells without nodes has nothing to iterate: found
+        // here, as the loop below cannot see its cells)
+        if self.cells.blocks().iter().any(|b| b.width == 0) {
+            return Err("a cell has no nodes".into());
+        }
         let per_cell = self.nodes_per_cell();
         for (c, cell) in self.cells.iter().enumerate() {
             // a mixed mesh: quads with triangles; tetrahedra, prisms,
