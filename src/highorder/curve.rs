@@ -1366,7 +1366,7 @@ fn fine_mesh<M, const D: usize>(sub: &Subdivision<M, D>, names: &[String], spaci
         p: sub.p,
         spacing,
         nodes,
-        cells: Cells::from_cells(D, sub.p, sub.shape, &sub.elements),
+        cells: sub.elements.clone(),
         boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
         part_names: names.to_vec(),
     }

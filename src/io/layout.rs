@@ -320,10 +320,7 @@ impl Layout {
             spacing: crate::mesh::element::Spacing::Equispaced,
             nodes: self.coords.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
             // in blocks of their kinds: `shape` is the first's
-            cells: cells.iter().fold(crate::mesh::Cells::new(), |mut out, c| {
-                out.push(c.shape, &c.nodes);
-                out
-            }),
+            cells: cells.iter().map(|c| (c.shape, &c.nodes)).collect(),
             boundary,
             part_names,
         };

@@ -57,12 +57,7 @@ impl Cells {
     /// count ([`Shape::with_nodes`]; a count no kind has gets `fallback`),
     /// consecutive cells of one kind in one block.
     pub fn from_cells<C: AsRef<[usize]>>(dim: usize, p: usize, fallback: Shape, cells: impl IntoIterator<Item = C>) -> Cells {
-        let mut out = Cells::new();
-        for c in cells {
-            let c = c.as_ref();
-            out.push(Shape::with_nodes(dim, p, c.len()).unwrap_or(fallback), c);
-        }
-        out
+        cells.into_iter().map(|c| (Shape::with_nodes(dim, p, c.as_ref().len()).unwrap_or(fallback), c)).collect()
     }
 
     /// Appends a cell of `shape`: to the last block if it is of that kind
@@ -120,28 +115,16 @@ impl Cells {
     }
 
     /// The cells' nodes in order, one slice per cell.
-    pub fn iter(&self) -> impl DoubleEndedIterator<Item = &[usize]> + ExactSizeIterator + Clone + '_ {
+    pub fn iter(&self) -> Iter<'_> {
         // every block's chunks; the sizes are known, so the chain is
         // wrapped to say so
-        Exact { inner: self.blocks.iter().flat_map(Block::cells), left: self.len() }
-    }
-
-    /// Each cell's kind and nodes, in order.
-    pub fn with_shapes(&self) -> impl Iterator<Item = (Shape, &[usize])> + '_ {
-        self.blocks.iter().flat_map(|b| b.cells().map(move |c| (b.shape, c)))
+        Exact { inner: self.blocks.iter().flat_map(Block::cells as fn(&Block) -> std::slice::ChunksExact<'_, usize>), left: self.len() }
     }
 
     /// Each cell's nodes as its own vector, in order (to edit the list
     /// and rebuild it with [`Cells::from_cells`]).
     pub fn to_vecs(&self) -> Vec<Vec<usize>> {
         self.iter().map(<[usize]>::to_vec).collect()
-    }
-
-    /// Renumbers every node reference by `f`.
-    pub fn map_nodes(&mut self, mut f: impl FnMut(usize) -> usize) {
-        for b in &mut self.blocks {
-            b.nodes.iter_mut().for_each(|v| *v = f(*v));
-        }
     }
 }
 
@@ -162,17 +145,32 @@ impl IndexMut<usize> for Cells {
     }
 }
 
-impl<'a> IntoIterator for &'a Cells {
-    type Item = &'a [usize];
-    type IntoIter = Box<dyn Iterator<Item = &'a [usize]> + 'a>;
-    fn into_iter(self) -> Self::IntoIter {
-        Box::new(self.iter())
+/// Cells each with its kind ([`Cells::push`] one by one), as a reader
+/// that knows every element's type gives them.
+impl<C: AsRef<[usize]>> FromIterator<(Shape, C)> for Cells {
+    fn from_iter<I: IntoIterator<Item = (Shape, C)>>(cells: I) -> Cells {
+        let mut out = Cells::new();
+        for (shape, c) in cells {
+            out.push(shape, c.as_ref());
+        }
+        out
     }
 }
 
+impl<'a> IntoIterator for &'a Cells {
+    type Item = &'a [usize];
+    type IntoIter = Iter<'a>;
+    fn into_iter(self) -> Iter<'a> {
+        self.iter()
+    }
+}
+
+/// The cells' nodes in order ([`Cells::iter`]): each block's chunks.
+pub type Iter<'a> = Exact<std::iter::FlatMap<std::slice::Iter<'a, Block>, std::slice::ChunksExact<'a, usize>, fn(&'a Block) -> std::slice::ChunksExact<'a, usize>>>;
+
 /// An iterator of known length (a chain of the blocks' chunks).
 #[derive(Clone)]
-struct Exact<I> {
+pub struct Exact<I> {
     inner: I,
     left: usize,
 }
@@ -240,7 +238,6 @@ mod tests {
             }
             proptest::prop_assert!(cells.iter().eq(list.iter().map(|c| &c.1[..])));
             proptest::prop_assert!(cells.iter().rev().eq(list.iter().rev().map(|c| &c.1[..])));
-            proptest::prop_assert!(cells.with_shapes().eq(list.iter().map(|c| (c.0, &c.1[..]))));
             proptest::prop_assert_eq!(cells.get(list.len()), None);
         }
     }

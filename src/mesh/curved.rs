@@ -46,9 +46,6 @@ pub struct CurvedMesh<const D: usize> {
 }
 
 impl<const D: usize> CurvedMesh<D> {
-    /// The dimension, for code outside the generic impl.
-    const DIM: usize = D;
-
     /// A structured mesh of `n[0] × … × n[D−1]` order-`p` cells of the unit
     /// box `[0,1]^D`, its nodes then moved by `map`. Nodes are numbered
     /// first axis fastest on the global grid of `n_d p + 1` nodes per axis,
@@ -362,7 +359,7 @@ impl CurvedMesh<2> {
         let (shape, perm) = if N == 3 { (Shape::Triangle, vec![0, 1, 2]) } else { (Shape::Quadrilateral, gmsh_quad_order(1).expect("order 1")) };
         let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&perm, c)).collect();
         let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
-        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
+        let cells = Cells::from_cells(2, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
@@ -375,7 +372,7 @@ impl CurvedMesh<2> {
         let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| if c.shape() == Shape::Quadrilateral { from_format(&quad, c.nodes()) } else { c.nodes().to_vec() }).collect();
         let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
         let shape = m.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
-        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
+        let cells = Cells::from_cells(2, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
@@ -390,7 +387,7 @@ impl CurvedMesh<3> {
         let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&cell, c)).collect();
         let boundary = m.faces.iter().map(|f| CurvedBoundary { nodes: from_format(&face, &f.nodes), part: f.part }).collect();
         let shape = if tet { Shape::Tetrahedron } else { Shape::Hexahedron };
-        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
+        let cells = Cells::from_cells(3, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }
@@ -414,7 +411,7 @@ impl CurvedMesh<3> {
         let face = |f: &[usize]| if f.len() == 4 { from_format(&quad, f) } else { f.to_vec() };
         let boundary = m.faces.iter().map(|(f, part)| CurvedBoundary { nodes: face(f), part: *part }).collect();
         let shape = m.cells.first().map_or(Shape::Prism, |c| c.shape());
-        let cells = Cells::from_cells(Self::DIM, 1, shape, cells);
+        let cells = Cells::from_cells(3, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
 }

@@ -15,7 +15,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, Cells, CurvedBoundary, CurvedMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, SolidMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -241,10 +241,7 @@ impl Raw {
             p,
             spacing: Spacing::Equispaced,
             nodes: self.nodes.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
-            cells: cells.iter().fold(Cells::new(), |mut out, c| {
-                out.push(c.1.kind.shape, &from_format(&perms[&c.1.kind.shape], c.2));
-                out
-            }),
+            cells: cells.iter().map(|c| (c.1.kind.shape, from_format(&perms[&c.1.kind.shape], c.2))).collect(),
             boundary: faces.iter().map(|&(nodes, part, b)| CurvedBoundary { nodes: from_format(&perms[&b.kind.shape], nodes), part }).collect(),
             part_names,
         };

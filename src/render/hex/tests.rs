@@ -1484,7 +1484,7 @@ fn hex_pyramid_tets(p: usize) -> CurvedMesh<3> {
         return CurvedMesh::from_mixed_solid(&coarse);
     }
     let (s, _) = crate::refine::subdivide_mixed_solid(&coarse, p, Spacing::Equispaced).unwrap();
-    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: Cells::from_cells(3, p, Shape::Hexahedron, &s.elements), boundary: vec![], part_names: vec![] }
+    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: s.elements.clone(), boundary: vec![], part_names: vec![] }
 }
 
 /// A mesh of hexes, a pyramid and tets is drawn cell by cell: its surface
