@@ -462,8 +462,8 @@ fn quality_of(path: &Path) -> Result<Figures> {
         AnyMesh::Curved2(mesh) => return curved_figures((mesh, tags)),
         AnyMesh::Curved3(mesh) => return curved_figures((mesh, tags)),
         // the certificate's figures, the order-1 case of the mesh of any order
-        AnyMesh::Mixed2(m) => return curved_figures((deformesh::mesh::CurvedMesh::from_mixed(&m), tags)),
-        AnyMesh::Mixed3(m) => return curved_figures((deformesh::mesh::CurvedMesh::from_mixed_solid(&m), tags)),
+        AnyMesh::Mixed2(m) => return curved_figures((m, tags)),
+        AnyMesh::Mixed3(m) => return curved_figures((m, tags)),
         AnyMesh::Quads(m) => deformesh::quality::mesh_quality(&m),
         AnyMesh::Triangles(m) => deformesh::quality::mesh_quality(&m),
         AnyMesh::Hexes(m) => deformesh::quality::hex_mesh_quality(&m),

@@ -30,7 +30,7 @@ use crate::deform::{BoundaryModel, BoundaryPart, Correspondence, DeformError, Mo
 use crate::lsfem::Constraint;
 use crate::mesh::element::{nodes_1d, prism, pyramid, simplex, Shape, Spacing};
 use crate::mesh::mixed::{hex_tets, prism_tets, pyramid_tets};
-use crate::mesh::{cut_quad, BoundaryEdge, Cells, BoundaryFace, HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, TetMesh, TriMesh};
+use crate::mesh::{cell_faces, cut_quad, BoundaryEdge, Cells, BoundaryFace, CurvedMesh, HexMesh, PlaneMesh, TetMesh, TriMesh};
 use crate::numeric::{dist2, dot, norm, unit};
 use crate::geometry::ClosestPoint;
 use std::collections::HashMap;
@@ -386,11 +386,11 @@ pub fn subdivide<M: Subdividable<D, N>, const D: usize, const N: usize>(coarse: 
 /// shorter diagonal, so one P1 system serves both kinds (the elements
 /// stay order-p quads; only the flow that places their nodes runs on
 /// triangles). Returns, per fine cell, the coarse cell it lies in.
-pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> Result<(Subdivision<TriMesh, 2>, Vec<usize>), SubdivideError> {
+pub fn subdivide_mixed(coarse: &CurvedMesh<2>, p: usize, spacing: Spacing) -> Result<(Subdivision<TriMesh, 2>, Vec<usize>), SubdivideError> {
     let t = nodes_1d(p, spacing).map_err(|_| SubdivideError::Order(p))?;
-    let facets = coarse.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
-    let per_cell = coarse.cells.iter().map(|c| {
-        let n = c.nodes();
+    let facets = coarse.linear_facets();
+    let per_cell = (0..coarse.cells.len()).map(|c| {
+        let n = coarse.vertices(c);
         (0..n.len()).map(|k| vec![n[k], n[(k + 1) % n.len()]]).collect()
     });
     let coarse_facets = orient_facets(per_cell, facets, &coarse.part_names)?;
@@ -400,18 +400,19 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; 2]> = Vec::new();
     let (mut elements, mut sub_cells, mut owner) = (Cells::new(), Vec::new(), Vec::new());
-    for (c, cell) in coarse.cells.iter().enumerate() {
+    for c in 0..coarse.cells.len() {
         let before = sub_cells.len();
-        match cell {
-            PlaneCell::Quad(q) => {
-                let el = tensor_element::<2, 4>(c, q, &coarse.nodes, &t, &mut ids, &mut nodes);
+        match *coarse.vertices(c).as_slice() {
+            [a, b, d, e] => {
+                let el = tensor_element::<2, 4>(c, &[a, b, d, e], &coarse.nodes, &t, &mut ids, &mut nodes);
                 for sub in tensor_sub_cells::<2, 4>(&el, p) {
                     sub_cells.extend(split_quad(sub, &nodes));
                 }
                 elements.push(Shape::Quadrilateral, &el);
             }
-            PlaneCell::Triangle(tri) => {
-                let el = simplex_element::<2, 3>(c, tri, &coarse.nodes, (&lattice, &space.nodes, p), &mut ids, &mut nodes);
+            ref tri => {
+                let tri = [tri[0], tri[1], tri[2]];
+                let el = simplex_element::<2, 3>(c, &tri, &coarse.nodes, (&lattice, &space.nodes, p), &mut ids, &mut nodes);
                 sub_cells.extend(subs.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
                 elements.push(Shape::Triangle, &el);
             }
@@ -420,7 +421,7 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
     }
     let b = boundary_places(&coarse.nodes, coarse_facets, &ids, nodes.len(), p, &t, spacing);
     let fine = TriMesh::assemble(nodes, sub_cells, b.fine_facets, coarse.part_names.clone());
-    let shape = coarse.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
+    let shape = coarse.shape;
     let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
     Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
 }
@@ -439,9 +440,10 @@ pub fn subdivide_mixed(coarse: &MixedPlaneMesh, p: usize, spacing: Spacing) -> R
 /// quad alike. The centre nodes come after every element's nodes (fine
 /// nodes `0..m` are the elements', `m` the largest element node + 1).
 /// Returns, per fine cell, the coarse cell it lies in.
-pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing) -> Result<(Subdivision<TetMesh, 3>, Vec<usize>), SubdivideError> {
+pub fn subdivide_mixed_solid(coarse: &CurvedMesh<3>, p: usize, spacing: Spacing) -> Result<(Subdivision<TetMesh, 3>, Vec<usize>), SubdivideError> {
     let t = nodes_1d(p, spacing).map_err(|_| SubdivideError::Order(p))?;
-    let coarse_facets = orient_facets(coarse.cells.iter().map(SolidCell::faces), coarse.faces.clone(), &coarse.part_names)?;
+    let per_cell = (0..coarse.cells.len()).map(|c| cell_faces(coarse.cells.shape(c), &coarse.vertices(c)));
+    let coarse_facets = orient_facets(per_cell, coarse.linear_facets(), &coarse.part_names)?;
     let tet_space = simplex::space(Shape::Tetrahedron, p, spacing).map_err(|_| SubdivideError::Order(p))?;
     let tet_lattice = simplex::lattice(Shape::Tetrahedron, p);
     let tets = simplex::sub_simplices(Shape::Tetrahedron, p);
@@ -455,31 +457,32 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
     let mut ids: HashMap<Key, usize> = HashMap::new();
     let mut nodes: Vec<[f64; 3]> = Vec::new();
     let (mut elements, mut sub_cells, mut owner) = (Cells::new(), Vec::new(), Vec::new());
-    for (c, cell) in coarse.cells.iter().enumerate() {
+    for c in 0..coarse.cells.len() {
         let before = sub_cells.len();
-        match cell {
-            SolidCell::Tet(tet) => {
-                let el = simplex_element::<3, 4>(c, tet, &coarse.nodes, (&tet_lattice, &tet_space.nodes, p), &mut ids, &mut nodes);
+        let v = coarse.vertices(c);
+        match coarse.cells.shape(c) {
+            Shape::Tetrahedron => {
+                let el = simplex_element::<3, 4>(c, &[v[0], v[1], v[2], v[3]], &coarse.nodes, (&tet_lattice, &tet_space.nodes, p), &mut ids, &mut nodes);
                 sub_cells.extend(tets.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
                 elements.push(Shape::Tetrahedron, &el);
             }
-            SolidCell::Prism(corners) => {
-                let el = keyed_element((c, corners, &coarse.nodes), (&prism_lattice, &prism_space.nodes, p), prism_key, prism_point, &mut ids, &mut nodes);
+            Shape::Prism => {
+                let el = keyed_element((c, &std::array::from_fn(|k| v[k]), &coarse.nodes), (&prism_lattice, &prism_space.nodes, p), prism_key, prism_point, &mut ids, &mut nodes);
                 for s in &sub_prisms {
                     sub_cells.extend(prism_tets(s.map(|a| el[a])));
                 }
                 elements.push(Shape::Prism, &el);
             }
-            SolidCell::Pyramid(corners) => {
-                let el = keyed_element((c, corners, &coarse.nodes), (&pyramid_lattice, &pyramid_space.nodes, p), pyramid_key, pyramid_point, &mut ids, &mut nodes);
+            Shape::Pyramid => {
+                let el = keyed_element((c, &std::array::from_fn(|k| v[k]), &coarse.nodes), (&pyramid_lattice, &pyramid_space.nodes, p), pyramid_key, pyramid_point, &mut ids, &mut nodes);
                 for s in &sub_pyramids {
                     sub_cells.extend(pyramid_tets(s.map(|a| el[a])));
                 }
                 sub_cells.extend(pyramid_sub_tets.iter().map(|s| s.map(|a| el[a])));
                 elements.push(Shape::Pyramid, &el);
             }
-            SolidCell::Hex(corners) => {
-                let el = tensor_element::<3, 8>(c, corners, &coarse.nodes, &t, &mut ids, &mut nodes);
+            _ => {
+                let el = tensor_element::<3, 8>(c, &std::array::from_fn(|k| v[k]), &coarse.nodes, &t, &mut ids, &mut nodes);
                 sub_hexes.extend(tensor_sub_cells::<3, 8>(&el, p).map(|h| (c, h)));
                 elements.push(Shape::Hexahedron, &el);
             }
@@ -502,7 +505,7 @@ pub fn subdivide_mixed_solid(coarse: &MixedSolidMesh, p: usize, spacing: Spacing
         _ => vec![(f, part)],
     });
     let fine = TetMesh::assemble(nodes, sub_cells, fine_facets.collect(), coarse.part_names.clone());
-    let shape = coarse.cells.first().map_or(Shape::Prism, |c| c.shape());
+    let shape = coarse.shape;
     let Boundary { places, facets, facet_corners, edges, on_facets, coarse_nodes, .. } = b;
     Ok((Subdivision { fine, shape, elements, facets, coarse_nodes, p, facet_corners, edges, places, on_facets }, owner))
 }
@@ -1730,17 +1733,16 @@ mod tests {
     /// the fine cells tile the box.
     #[test]
     fn mixed_subdivision_shares_edges_across_kinds() {
-        use crate::mesh::{MixedPlaneMesh, PlaneCell};
         let q = QuadMesh::structured_box([0.0, 0.0], [1.0, 1.0], 3, 2);
         let mut cells = Vec::new();
         for (c, &[a, b, cc, d]) in q.cells.iter().enumerate() {
             if c % 3 == 2 {
-                cells.extend([PlaneCell::Triangle([a, b, cc]), PlaneCell::Triangle([a, cc, d])]);
+                cells.extend([(Shape::Triangle, vec![a, b, cc]), (Shape::Triangle, vec![a, cc, d])]);
             } else {
-                cells.push(PlaneCell::Quad([a, b, cc, d]));
+                cells.push((Shape::Quadrilateral, vec![a, b, cc, d]));
             }
         }
-        let coarse = MixedPlaneMesh { nodes: q.nodes.clone(), cells, edges: q.edges.clone(), part_names: q.part_names.clone() };
+        let coarse = CurvedMesh::linear(q.nodes.clone(), cells, q.edges.iter().map(|e| (e.nodes, e.part)), q.part_names.clone());
         for p in 1..=4 {
             let (s, owner) = subdivide_mixed(&coarse, p, Spacing::GaussLobatto).unwrap();
             // 4 quads of (p+1)² nodes and 4 triangles of (p+1)(p+2)/2, less
@@ -1758,13 +1760,13 @@ mod tests {
             assert!((s.fine.area() - 1.0).abs() < 1e-14);
             assert_eq!(s.fine.edges.len(), 10 * p);
             let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
-            assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+            assert_eq!(kinds, (0..coarse.cells.len()).map(|c| coarse.cells.shape(c)).collect::<Vec<_>>());
             // each fine cell lies in its owner: its centroid inside the
             // coarse cell's bounding box
             for (f, cell) in s.fine.cells.iter().enumerate() {
                 let c = cell.map(|n| s.fine.nodes[n]);
                 let mid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0];
-                let corners = coarse.cells[owner[f]].nodes().iter().map(|&n| coarse.nodes[n]);
+                let corners = coarse.cells[owner[f]].iter().map(|&n| coarse.nodes[n]);
                 let (lo, hi) = corners.fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), x| ([lo[0].min(x[0]), lo[1].min(x[1])], [hi[0].max(x[0]), hi[1].max(x[1])]));
                 assert!((0..2).all(|d| lo[d] < mid[d] && mid[d] < hi[d]), "fine cell {f} outside coarse cell {}", owner[f]);
             }
@@ -1776,7 +1778,7 @@ mod tests {
     /// face is held twice (by two tetrahedra, or one and a fine boundary
     /// facet: the cuts of a shared quad agree), and the elements keep
     /// their kinds.
-    fn assert_conforming_tets(s: &Subdivision<TetMesh, 3>, coarse: &crate::mesh::MixedSolidMesh, volume: f64, what: &str) {
+    fn assert_conforming_tets(s: &Subdivision<TetMesh, 3>, coarse: &CurvedMesh<3>, volume: f64, what: &str) {
         let vols: Vec<f64> = s.fine.cells.iter().map(|c| {
             let x = c.map(|n| s.fine.nodes[n]);
             let e = |a: usize| std::array::from_fn::<f64, 3, _>(|d| x[a][d] - x[0][d]);
@@ -1802,7 +1804,19 @@ mod tests {
         }
         assert!(held.values().all(|&n| n == 2), "{what}: a face held once: the cuts of a shared quad differ");
         let kinds: Vec<Shape> = (0..s.elements.len()).map(|e| s.element_shape(e)).collect();
-        assert_eq!(kinds, coarse.cells.iter().map(|c| c.shape()).collect::<Vec<_>>());
+        assert_eq!(kinds, (0..coarse.cells.len()).map(|c| coarse.cells.shape(c)).collect::<Vec<_>>());
+    }
+
+    /// The boundary of `cells` (kind and vertices): the faces held once,
+    /// in part 0.
+    fn outer_faces(cells: &[(Shape, Vec<usize>)]) -> Vec<(Vec<usize>, usize)> {
+        let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
+        for f in cells.iter().flat_map(|(shape, v)| cell_faces(*shape, v)) {
+            let mut k = f.clone();
+            k.sort_unstable();
+            count.entry(k).or_insert((0, f)).0 += 1;
+        }
+        count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect()
     }
 
     /// A column of two prisms under six tetrahedra (the top layer's
@@ -1813,7 +1827,6 @@ mod tests {
     /// their kinds and node counts.
     #[test]
     fn prisms_and_tets_subdivide_into_conforming_tets() {
-        use crate::mesh::{MixedSolidMesh, SolidCell};
         let order = [7, 2, 11, 4, 0, 9, 5, 1, 10, 3, 8, 6];
         let mut nodes = vec![[0.0; 3]; 12];
         for level in 0..3 {
@@ -1823,19 +1836,13 @@ mod tests {
         }
         let at = |level: usize, k: usize| order[4 * level + k];
         let prism = |l: usize, t: [usize; 3]| [at(l, t[0]), at(l, t[1]), at(l, t[2]), at(l + 1, t[0]), at(l + 1, t[1]), at(l + 1, t[2])];
-        let mut cells = vec![SolidCell::Prism(prism(0, [0, 1, 2])), SolidCell::Prism(prism(0, [0, 2, 3]))];
+        let mut cells = vec![(Shape::Prism, prism(0, [0, 1, 2]).to_vec()), (Shape::Prism, prism(0, [0, 2, 3]).to_vec())];
         for t in [[0, 1, 2], [0, 2, 3]] {
-            cells.extend(prism_tets(prism(1, t)).map(SolidCell::Tet));
+            cells.extend(prism_tets(prism(1, t)).map(|t| (Shape::Tetrahedron, t.to_vec())));
         }
-        let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
-        for f in cells.iter().flat_map(SolidCell::faces) {
-            let mut k = f.clone();
-            k.sort_unstable();
-            count.entry(k).or_insert((0, f)).0 += 1;
-        }
-        let faces: Vec<(Vec<usize>, usize)> = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
+        let faces = outer_faces(&cells);
         assert_eq!(faces.iter().filter(|f| f.0.len() == 4).count(), 4, "the prisms' four side quads");
-        let coarse = MixedSolidMesh { nodes, cells, faces, part_names: vec!["all".into()] };
+        let coarse = CurvedMesh::linear(nodes, cells, faces, vec!["all".into()]);
         for p in 1..=4 {
             let (s, owner) = subdivide_mixed_solid(&coarse, p, Spacing::GaussLobatto).unwrap();
             assert_eq!(s.fine.cells.len(), 2 * 3 * p * p * p + 6 * p * p * p, "p = {p}");
@@ -1853,7 +1860,7 @@ mod tests {
     /// after every element node.
     #[test]
     fn hexes_pyramids_and_tets_subdivide_into_conforming_tets() {
-        use crate::mesh::{MixedSolidMesh, SolidCell};
+        use crate::mesh::corner_jacobians;
         let points = [
             [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
             [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [2.0, 0.0, 1.0], [2.0, 1.0, 1.0], [0.5, 0.5, 1.6],
@@ -1866,30 +1873,18 @@ mod tests {
         }
         let at = |k: usize| order[k];
         let mut cells = vec![
-            SolidCell::Hex([0, 1, 2, 3, 4, 5, 6, 7].map(at)),
-            SolidCell::Hex([1, 8, 9, 2, 5, 10, 11, 6].map(at)),
-            SolidCell::Pyramid([4, 5, 6, 7, 12].map(at)),
+            (Shape::Hexahedron, [0, 1, 2, 3, 4, 5, 6, 7].map(at).to_vec()),
+            (Shape::Hexahedron, [1, 8, 9, 2, 5, 10, 11, 6].map(at).to_vec()),
+            (Shape::Pyramid, [4, 5, 6, 7, 12].map(at).to_vec()),
         ];
         // on each triangle (a, b, apex) of the pyramid, outward
         for (a, b, out) in [(4, 5, 13), (5, 6, 14), (6, 7, 15), (7, 4, 16)] {
-            cells.push(SolidCell::Tet([a, b, 12, out].map(at)));
+            cells.push((Shape::Tetrahedron, [a, b, 12, out].map(at).to_vec()));
         }
-        let volume: f64 = cells.iter().map(|c| {
-            let j = c.corner_jacobians(&nodes);
-            match c {
-                SolidCell::Tet(_) => j[0] / 6.0,
-                _ => 0.0,
-            }
-        }).sum::<f64>() + 2.0 + 0.6 / 3.0;
-        assert!(cells.iter().all(|c| c.corner_jacobians(&nodes).iter().all(|&j| j > 0.0)));
-        let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
-        for f in cells.iter().flat_map(SolidCell::faces) {
-            let mut k = f.clone();
-            k.sort_unstable();
-            count.entry(k).or_insert((0, f)).0 += 1;
-        }
-        let faces: Vec<(Vec<usize>, usize)> = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
-        let coarse = MixedSolidMesh { nodes, cells, faces, part_names: vec!["all".into()] };
+        let volume: f64 = cells.iter().filter(|c| c.0 == Shape::Tetrahedron).map(|(shape, v)| corner_jacobians(*shape, v, &nodes)[0] / 6.0).sum::<f64>() + 2.0 + 0.6 / 3.0;
+        assert!(cells.iter().all(|(shape, v)| corner_jacobians(*shape, v, &nodes).iter().all(|&j| j > 0.0)));
+        let faces = outer_faces(&cells);
+        let coarse = CurvedMesh::linear(nodes, cells, faces, vec!["all".into()]);
         for p in 1..=4 {
             for spacing in [Spacing::Equispaced, Spacing::GaussLobatto] {
                 let (s, owner) = subdivide_mixed_solid(&coarse, p, spacing).unwrap();

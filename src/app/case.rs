@@ -11,7 +11,7 @@ use crate::highorder::curve::CurveOptions;
 use crate::highorder::{check_order, Spacing};
 use crate::jacobian::{lift, ImageField, JacobianError, Interface, JacobianField, Locus, SmallWhere, Target, TimePath, EXPR_VARS};
 use crate::mesh::element::Shape;
-use crate::mesh::{HexMesh, MixedPlaneMesh, MixedSolidMesh, PlaneMesh, QuadMesh, SolidMesh, TetMesh, TriMesh, BOX_FACES, BOX_SIDES};
+use crate::mesh::{CurvedMesh, HexMesh, PlaneMesh, QuadMesh, SolidMesh, TetMesh, TriMesh, BOX_FACES, BOX_SIDES};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -626,8 +626,8 @@ impl Case {
             // re-tag the box's side indices with part indices
             let retag = |edges: &mut Vec<crate::mesh::BoundaryEdge>| edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
             if kind == ElementsSpec::Mixed {
-                let mut mesh = MixedPlaneMesh::structured_box(lo, hi, m.cells[0], m.cells[1]);
-                retag(&mut mesh.edges);
+                let mut mesh = CurvedMesh::checkerboard(lo, hi, m.cells[0], m.cells[1]);
+                mesh.boundary.iter_mut().for_each(|b| b.part = side_part[b.part]);
                 mesh.part_names = names;
                 let mesh = CutPlane::new(mesh);
                 check(&mut plane_points(mesh.simplices()))?;
@@ -657,10 +657,10 @@ impl Case {
             return Ok(AnySetup::Hex(Setup { name, mesh, parts, field, options, output, highorder }));
         }
         let mut solid = match kind.shape() {
-            Some(shape) => MixedSolidMesh::structured_box(lo, hi, n, shape).expect("a solid kind"),
-            None => MixedSolidMesh::hex_prism_box(lo, hi, n),
+            Some(shape) => CurvedMesh::brick(lo, hi, n, shape).expect("a solid kind"),
+            None => CurvedMesh::hex_prism_box(lo, hi, n),
         };
-        solid.faces.iter_mut().for_each(|f| f.1 = face_part[f.1]);
+        solid.boundary.iter_mut().for_each(|b| b.part = face_part[b.part]);
         solid.part_names = names;
         if let Some(mesh) = solid.to_tet_mesh() {
             check(&mut solid_points(&mesh))?;

@@ -14,7 +14,7 @@ use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
 use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
-use crate::mesh::{polygon_area, MixedPlaneMesh, MixedSolidMesh, PlaneMesh, Point2, Point3, SolidMesh};
+use crate::mesh::{polygon_area, PlaneMesh, Point2, Point3, SolidMesh};
 use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
 use serde::Serialize;
@@ -375,8 +375,9 @@ impl<const N: usize> Curvable<2> for PlaneMesh<N> {
     }
 }
 
-/// Quads and triangles together (Algorithm 1 moves them as a [`Cut`]).
-impl Curvable<2> for MixedPlaneMesh {
+/// Quads and triangles together, the linear mesh of order 1 (Algorithm 1
+/// moves them as a [`Cut`]).
+impl Curvable<2> for CurvedMesh<2> {
     fn curve(&self, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<2>, CurveError> {
         crate::highorder::curve::curve_mixed(self, parts, opts, algorithm2(progress))
     }
@@ -877,21 +878,24 @@ where
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
 }
 
-/// `curve` on a solid of prisms, alone or with tetrahedra.
-fn curve_mixed_solid(mut mesh: MixedSolidMesh, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
+/// `curve` on a linear solid of prisms, pyramids, hexes and tetrahedra,
+/// several kinds or prisms or pyramids alone.
+fn curve_mixed_solid(mut mesh: CurvedMesh<3>, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     let gfile = binding.gfile;
+    let facets = mesh.linear_facets();
     if let Some(model) = binding.model {
-        let cad = crate::app::cad::bind::<3>(model, (job.1, &mesh.nodes), (&mesh.faces, &mesh.part_names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
-        (mesh.faces, mesh.part_names) = (cad.facets, cad.names);
+        let cad = crate::app::cad::bind::<3>(model, (job.1, &mesh.nodes), (&facets, &mesh.part_names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
+        mesh.set_linear_facets(cad.facets);
+        mesh.part_names = cad.names;
         return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some(model)));
     }
     let geometry = binding.geometry.expect("a geometry file where there is no model");
     let names = mesh.part_names.clone();
     let (parts, unbound) = geometry.parts::<3>(&names, gfile)?;
-    geometry.check_carried(&names, &crate::app::bind::carried(mesh.faces.iter().map(|f| f.1), names.len()), gfile)?;
-    let (kept, shared) = one_group_per_facet(mesh.faces.clone(), &names, &unbound, gfile)?;
+    geometry.check_carried(&names, &crate::app::bind::carried(facets.iter().map(|f| f.1), names.len()), gfile)?;
+    let (kept, shared) = one_group_per_facet(facets, &names, &unbound, gfile)?;
     if let Some(kept) = kept {
-        mesh.faces = kept;
+        mesh.set_linear_facets(kept);
     }
     curve_mesh(&mesh, &parts, (unbound, &shared), 0, job, (progress, None))
 }
@@ -903,7 +907,7 @@ pub trait CutWords {
     const DEFINITIONS: Definitions;
 }
 
-impl CutWords for MixedSolidMesh {
+impl CutWords for CurvedMesh<3> {
     const DEFINITIONS: Definitions = Definitions {
         det_j: "determinant of each cell's linear map from its reference element (Gmsh's vertices, mapped to [0,1]-based ones: tetrahedron, prism, pyramid, cube), bounded by its Bezier coefficients as the curved elements are (order 1)",
         scaled_jacobian: "per cell, det J/(product of the column norms of J), its minimum on the order-1 certificate's sampling grid",
@@ -911,7 +915,7 @@ impl CutWords for MixedSolidMesh {
     };
 }
 
-impl CutWords for MixedPlaneMesh {
+impl CutWords for CurvedMesh<2> {
     const DEFINITIONS: Definitions = Definitions {
         det_j: "determinant of each cell's linear map from its reference element (triangle (0,0),(1,0),(0,1); square [0,1]^2), bounded by its Bezier coefficients as the curved elements are (order 1)",
         scaled_jacobian: "per cell, det J/(product of the column norms of J), its minimum on the order-1 certificate's sampling grid",
@@ -921,11 +925,11 @@ impl CutWords for MixedPlaneMesh {
 
 /// Meshes of several kinds: Algorithm 1 on their simplices, everything
 /// written and drawn by their own cells.
-impl<M, const D: usize, const N: usize> Outputs<D, N> for Cut<M, D, N>
+impl<const D: usize, const N: usize> Outputs<D, N> for Cut<D, N>
 where
-    M: Cuttable<D, N> + Curvable<D> + CutWords,
+    CurvedMesh<D>: Cuttable<D, N> + Curvable<D> + CutWords,
 {
-    const DEFINITIONS: Definitions = M::DEFINITIONS;
+    const DEFINITIONS: Definitions = <CurvedMesh<D> as CutWords>::DEFINITIONS;
     fn quality(&self) -> MeshQuality {
         self.quality_and_scaled_jacobians().0
     }
@@ -934,7 +938,7 @@ where
     }
     /// Both from one certification of the cells at order 1.
     fn quality_and_scaled_jacobians(&self) -> (MeshQuality, Vec<f64>) {
-        let (certs, q) = certify_mesh(&self.mesh().as_curved()).expect("order 1 of every kind");
+        let (certs, q) = certify_mesh(&self.mesh()).expect("order 1 of every kind");
         let sizes = self.written_sums(&self.cell_sizes(self.nodes()));
         let quality = MeshQuality {
             cells: q.elements,
@@ -950,13 +954,13 @@ where
         Q1Mesh::cells(self).iter().map(|t| crate::quality::cell_size(&t.map(|n| nodes[n]))).collect()
     }
     fn msh(&self) -> Result<String, MshError> {
-        self.mesh().as_curved().msh_string()
+        self.mesh().msh_string()
     }
     fn vtu(&self, cell_data: &[(&str, &[f64])]) -> Result<String, VtuError> {
-        self.mesh().as_curved().vtu_string(cell_data)
+        self.mesh().vtu_string(cell_data)
     }
     fn draw(&self, nodes: &[[f64; D]], values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError> {
-        M::draw_curved(&self.mesh_at(nodes).as_curved(), values, look)
+        <CurvedMesh<D> as Curvable<D>>::draw_curved(&self.mesh_at(nodes), values, look)
     }
     fn written_ratios(&self, nodes: &[[f64; D]], values: &[f64]) -> Vec<f64> {
         // a cell's ratio is its simplices' size over the sum of what each
@@ -970,19 +974,21 @@ where
     }
 }
 
-impl<M, const D: usize, const N: usize> Curvable<D> for Cut<M, D, N>
+impl<const D: usize, const N: usize> Curvable<D> for Cut<D, N>
 where
-    M: Cuttable<D, N> + Curvable<D>,
+    CurvedMesh<D>: Cuttable<D, N> + Curvable<D>,
 {
     fn curve(&self, parts: &[BoundaryPart<D>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<D>, CurveError> {
         self.mesh().curve(parts, opts, progress)
     }
     fn draw_curved(mesh: &CurvedMesh<D>, values: &[f64], look: &Look<D>) -> Result<tiny_skia::Pixmap, RenderError> {
-        M::draw_curved(mesh, values, look)
+        <CurvedMesh<D> as Curvable<D>>::draw_curved(mesh, values, look)
     }
 }
 
-impl Curvable<3> for MixedSolidMesh {
+/// Solids of several kinds, or prisms or pyramids, the linear mesh of
+/// order 1 (Algorithm 1 moves them as a [`Cut`]).
+impl Curvable<3> for CurvedMesh<3> {
     fn curve(&self, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: &mut dyn FnMut(Progress)) -> Result<Curved<3>, CurveError> {
         crate::highorder::curve::curve_mixed_solid(self, parts, opts, algorithm2(progress))
     }
@@ -995,26 +1001,42 @@ impl Curvable<3> for MixedSolidMesh {
 trait PlaneInput: Curvable<2> {
     /// See [`PlaneMesh::orient_counter_clockwise`].
     fn orient(&mut self) -> usize;
-    /// The nodes, the part names and the boundary edges (to keep one
-    /// copy of each, or regroup them by entity).
-    fn boundary(&mut self) -> (&[[f64; 2]], &mut Vec<String>, &mut Vec<crate::mesh::BoundaryEdge>);
+    /// The nodes and the part names.
+    fn nodes_and_names(&mut self) -> (&[[f64; 2]], &mut Vec<String>);
+    /// The boundary edges and their parts.
+    fn edges(&self) -> Vec<(Vec<usize>, usize)>;
+    /// Replaces the boundary edges (to keep one copy of each, or regroup
+    /// them by entity).
+    fn set_edges(&mut self, edges: Vec<(Vec<usize>, usize)>);
 }
 
 impl<const N: usize> PlaneInput for PlaneMesh<N> {
     fn orient(&mut self) -> usize {
         self.orient_counter_clockwise()
     }
-    fn boundary(&mut self) -> (&[[f64; 2]], &mut Vec<String>, &mut Vec<crate::mesh::BoundaryEdge>) {
-        (&self.nodes, &mut self.part_names, &mut self.edges)
+    fn nodes_and_names(&mut self) -> (&[[f64; 2]], &mut Vec<String>) {
+        (&self.nodes, &mut self.part_names)
+    }
+    fn edges(&self) -> Vec<(Vec<usize>, usize)> {
+        self.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect()
+    }
+    fn set_edges(&mut self, edges: Vec<(Vec<usize>, usize)>) {
+        self.edges = edges.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
     }
 }
 
-impl PlaneInput for MixedPlaneMesh {
+impl PlaneInput for CurvedMesh<2> {
     fn orient(&mut self) -> usize {
         self.orient_counter_clockwise()
     }
-    fn boundary(&mut self) -> (&[[f64; 2]], &mut Vec<String>, &mut Vec<crate::mesh::BoundaryEdge>) {
-        (&self.nodes, &mut self.part_names, &mut self.edges)
+    fn nodes_and_names(&mut self) -> (&[[f64; 2]], &mut Vec<String>) {
+        (&self.nodes, &mut self.part_names)
+    }
+    fn edges(&self) -> Vec<(Vec<usize>, usize)> {
+        self.linear_facets()
+    }
+    fn set_edges(&mut self, edges: Vec<(Vec<usize>, usize)>) {
+        self.set_linear_facets(edges);
     }
 }
 
@@ -1023,23 +1045,21 @@ fn curve_plane(mut mesh: impl PlaneInput, binding: &Binding, job: (&CurveJob, &c
     // Gmsh may write a surface's cells clockwise (by its normal)
     let turned = mesh.orient();
     let gfile = binding.gfile;
-    let (nodes, names, edges) = mesh.boundary();
-    let to_edges = |facets: Vec<(Vec<usize>, usize)>| facets.into_iter().map(|(n, part)| crate::mesh::BoundaryEdge { nodes: [n[0], n[1]], part }).collect();
+    let edges = mesh.edges();
+    let (nodes, names) = mesh.nodes_and_names();
     if let Some(model) = binding.model {
-        let facets: Vec<(Vec<usize>, usize)> = edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
-        let cad = crate::app::cad::bind::<2>(model, (job.1, nodes), (&facets, names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
-        *edges = to_edges(cad.facets);
+        let cad = crate::app::cad::bind::<2>(model, (job.1, nodes), (&edges, names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
         *names = cad.names;
+        mesh.set_edges(cad.facets);
         return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), turned, job, (progress, Some(model)));
     }
     let geometry = binding.geometry.expect("a geometry file where there is no model");
     let names = names.to_vec();
     let (parts, unbound) = geometry.parts::<2>(&names, gfile)?;
-    geometry.check_carried(&names, &crate::app::bind::carried(edges.iter().map(|e| e.part), names.len()), gfile)?;
-    let facets = edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
-    let (kept, shared) = one_group_per_facet(facets, &names, &unbound, gfile)?;
+    geometry.check_carried(&names, &crate::app::bind::carried(edges.iter().map(|e| e.1), names.len()), gfile)?;
+    let (kept, shared) = one_group_per_facet(edges, &names, &unbound, gfile)?;
     if let Some(kept) = kept {
-        *edges = to_edges(kept);
+        mesh.set_edges(kept);
     }
     curve_mesh(&mesh, &parts, (unbound, &shared), turned, job, (progress, None))
 }

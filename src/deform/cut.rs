@@ -1,110 +1,91 @@
 //! Algorithm 1 on meshes of several kinds of cells: quadrilaterals with
 //! triangles in the plane; prisms, pyramids, hexes and tetrahedra, alone
-//! or mixed, in space. The div–curl system is the simplices' cut from the
-//! cells ([`MixedPlaneMesh::triangles`], [`MixedSolidMesh::tetrahedra`]:
-//! no new unknowns but a node at each hex's centre), the boundary model
-//! that of their boundary edges or triangles, and a step is taken only if
-//! the cells themselves stay valid (certified as the curved elements are,
-//! at order 1): a prism or pyramid can fold while its tetrahedra do not.
+//! or mixed, in space — the linear [`CurvedMesh`] (`p = 1`). The div–curl
+//! system is the simplices' cut from the cells ([`CurvedMesh::triangles`],
+//! [`CurvedMesh::tetrahedra`]: no new unknowns but a node at each hex's
+//! centre), the boundary model that of their boundary edges or
+//! triangles, and a step is taken only if the cells themselves stay valid
+//! (certified as the curved elements are, at order 1): a prism or pyramid
+//! can fold while its tetrahedra do not.
 
 use super::{BoundaryPart, Q1Mesh};
 use crate::mesh::element::Spacing;
-use crate::mesh::{Cells, CurvedMesh, MixedPlaneMesh, MixedSolidMesh, TetMesh, TriMesh};
+use crate::mesh::{CurvedMesh, TetMesh, TriMesh};
 use crate::quality::certify::Certifiers;
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// A linear mesh whose cells are of several kinds, as [`Cut`] needs it.
-pub trait Cuttable<const D: usize, const N: usize>: Clone + Send + Sync {
+/// The simplices a linear mesh of dimension `D` is cut into, `N` nodes
+/// each: triangles in the plane, tetrahedra in space.
+pub trait Cuttable<const D: usize, const N: usize> {
     /// The simplices Algorithm 1 solves on.
     type Simplices: Q1Mesh<D, N>;
     /// The mesh cut into simplices (its nodes first, any new ones after)
     /// and the cell each simplex was cut from.
     fn cut(&self) -> (Self::Simplices, Vec<usize>);
-    /// The cells as the order-1 case of the curved mesh (each cell's
-    /// nodes in its kind's lattice order).
-    fn as_curved(&self) -> CurvedMesh<D>;
-    /// Its nodes.
-    fn node_positions(&self) -> &[[f64; D]];
-    /// The same cells on nodes `nodes` (as many as it has).
-    fn with_nodes(&self, nodes: Vec<[f64; D]>) -> Self;
 }
 
-impl Cuttable<2, 3> for MixedPlaneMesh {
+impl Cuttable<2, 3> for CurvedMesh<2> {
     type Simplices = TriMesh;
     fn cut(&self) -> (TriMesh, Vec<usize>) {
         self.triangles()
     }
-    fn as_curved(&self) -> CurvedMesh<2> {
-        CurvedMesh::from_mixed(self)
-    }
-    fn node_positions(&self) -> &[[f64; 2]] {
-        &self.nodes
-    }
-    fn with_nodes(&self, nodes: Vec<[f64; 2]>) -> Self {
-        MixedPlaneMesh { nodes, cells: self.cells.clone(), edges: self.edges.clone(), part_names: self.part_names.clone() }
-    }
 }
 
-impl Cuttable<3, 4> for MixedSolidMesh {
+impl Cuttable<3, 4> for CurvedMesh<3> {
     type Simplices = TetMesh;
     fn cut(&self) -> (TetMesh, Vec<usize>) {
         self.tetrahedra()
-    }
-    fn as_curved(&self) -> CurvedMesh<3> {
-        CurvedMesh::from_mixed_solid(self)
-    }
-    fn node_positions(&self) -> &[[f64; 3]] {
-        &self.nodes
-    }
-    fn with_nodes(&self, nodes: Vec<[f64; 3]>) -> Self {
-        MixedSolidMesh { nodes, cells: self.cells.clone(), faces: self.faces.clone(), part_names: self.part_names.clone() }
     }
 }
 
 /// A linear mesh moved through the simplices cut from its cells.
 #[derive(Clone)]
-pub struct Cut<M: Cuttable<D, N>, const D: usize, const N: usize> {
-    /// The cells and boundary facets (their nodes are the first of
-    /// `simplices`'); `mesh`'s nodes are the starting positions.
-    mesh: M,
+pub struct Cut<const D: usize, const N: usize>
+where
+    CurvedMesh<D>: Cuttable<D, N>,
+{
+    /// The cells (each in its kind's lattice order, in blocks of one kind,
+    /// as the certifiers take them) and boundary facets; their nodes are
+    /// the first of `simplices`', `mesh`'s the starting positions.
+    mesh: CurvedMesh<D>,
     /// The simplices Algorithm 1 solves on, at the current positions.
-    simplices: M::Simplices,
+    simplices: <CurvedMesh<D> as Cuttable<D, N>>::Simplices,
     /// The cell each simplex was cut from.
     owner: Vec<usize>,
-    /// The cells' vertices in their kinds' lattice order, in blocks of
-    /// one kind, for the certifiers.
-    lattice: Cells,
     certifiers: Arc<Certifiers>,
 }
 
 /// Prisms, pyramids, hexes and tetrahedra moved through tetrahedra.
-pub type CutSolid = Cut<MixedSolidMesh, 3, 4>;
+pub type CutSolid = Cut<3, 4>;
 /// Quadrilaterals and triangles moved through triangles.
-pub type CutPlane = Cut<MixedPlaneMesh, 2, 3>;
+pub type CutPlane = Cut<2, 3>;
 
-impl<M: Cuttable<D, N>, const D: usize, const N: usize> Cut<M, D, N> {
-    /// Cuts `mesh` into simplices.
-    pub fn new(mesh: M) -> Self {
+impl<const D: usize, const N: usize> Cut<D, N>
+where
+    CurvedMesh<D>: Cuttable<D, N>,
+{
+    /// Cuts the linear `mesh` into simplices.
+    pub fn new(mesh: CurvedMesh<D>) -> Self {
+        debug_assert_eq!(mesh.p, 1, "Algorithm 1 moves linear meshes");
         let (simplices, owner) = mesh.cut();
-        let curved = mesh.as_curved();
-        let certifiers = Certifiers::new(&curved.shapes(), 1, Spacing::Equispaced).expect("order 1 of every kind");
-        Cut { mesh, simplices, owner, lattice: curved.cells, certifiers: Arc::new(certifiers) }
+        let certifiers = Certifiers::new(&mesh.shapes(), 1, Spacing::Equispaced).expect("order 1 of every kind");
+        Cut { mesh, simplices, owner, certifiers: Arc::new(certifiers) }
     }
 
     /// The cells at the current positions.
-    pub fn mesh(&self) -> M {
+    pub fn mesh(&self) -> CurvedMesh<D> {
         self.mesh_at(self.simplices.nodes())
     }
 
     /// The cells at positions `nodes` (of the simplices' nodes: the
     /// hexes' centres, after the cells' nodes, are left out).
-    pub fn mesh_at(&self, nodes: &[[f64; D]]) -> M {
-        self.mesh.with_nodes(nodes[..self.mesh.node_positions().len()].to_vec())
+    pub fn mesh_at(&self, nodes: &[[f64; D]]) -> CurvedMesh<D> {
+        CurvedMesh { nodes: nodes[..self.mesh.nodes.len()].to_vec(), ..self.mesh.clone() }
     }
 
     /// The simplices Algorithm 1 solves on, at the current positions.
-    pub fn simplices(&self) -> &M::Simplices {
+    pub fn simplices(&self) -> &<CurvedMesh<D> as Cuttable<D, N>>::Simplices {
         &self.simplices
     }
 
@@ -115,19 +96,20 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Cut<M, D, N> {
 
     /// The cells not certified valid at positions `nodes`, in order.
     pub fn invalid_cells_of_kinds(&self, nodes: &[[f64; D]]) -> Vec<usize> {
-        (0..self.lattice.len())
+        let cells = &self.mesh.cells;
+        (0..cells.len())
             .into_par_iter()
             .with_min_len(256)
             .filter(|&c| {
-                let ctrl: Vec<[f64; D]> = self.lattice[c].iter().map(|&n| nodes[n]).collect();
-                !self.certifiers.of(self.lattice.shape(c)).is_valid(&ctrl)
+                let ctrl: Vec<[f64; D]> = cells[c].iter().map(|&n| nodes[n]).collect();
+                !self.certifiers.of(cells.shape(c)).is_valid(&ctrl)
             })
             .collect()
     }
 
     /// Per cell, the sum of its simplices' `values`.
     pub fn summed(&self, values: &[f64]) -> Vec<f64> {
-        let mut out = vec![0.0; self.lattice.len()];
+        let mut out = vec![0.0; self.mesh.cells.len()];
         for (t, v) in values.iter().enumerate() {
             out[self.owner[t]] += v;
         }
@@ -135,8 +117,11 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Cut<M, D, N> {
     }
 }
 
-impl<M: Cuttable<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for Cut<M, D, N> {
-    type Boundary = <M::Simplices as Q1Mesh<D, N>>::Boundary;
+impl<const D: usize, const N: usize> Q1Mesh<D, N> for Cut<D, N>
+where
+    CurvedMesh<D>: Cuttable<D, N>,
+{
+    type Boundary = <<CurvedMesh<D> as Cuttable<D, N>>::Simplices as Q1Mesh<D, N>>::Boundary;
 
     fn cells(&self) -> &[[usize; N]] {
         self.simplices.cells()
@@ -156,7 +141,7 @@ impl<M: Cuttable<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for Cut<M, 
 
     /// The simplices that are invalid or cut from a cell that is.
     fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize> {
-        let mut bad = vec![false; self.lattice.len()];
+        let mut bad = vec![false; self.mesh.cells.len()];
         self.invalid_cells_of_kinds(nodes).into_iter().for_each(|c| bad[c] = true);
         let simplices = self.simplices.invalid_cells(nodes);
         let mut out: Vec<usize> = (0..self.owner.len()).filter(|&t| bad[self.owner[t]]).chain(simplices).collect();
@@ -184,7 +169,7 @@ mod tests {
     /// quad is caught and both its triangles named.
     #[test]
     fn a_folded_quad_is_caught_though_its_triangles_are_positive() {
-        let mut cut = CutPlane::new(MixedPlaneMesh::structured_box([0.0; 2], [1.0; 2], 1, 1));
+        let mut cut = CutPlane::new(CurvedMesh::checkerboard([0.0; 2], [1.0; 2], 1, 1));
         assert_eq!(cut.simplices().cells, vec![[0, 1, 3], [0, 3, 2]]);
         assert!(cut.invalid_cells(cut.nodes()).is_empty());
         cut.nodes_mut()[0] = [0.7, 0.7];
@@ -201,7 +186,7 @@ mod tests {
     /// cut from a folded cell is named.
     #[test]
     fn a_folded_prism_is_caught_though_its_tetrahedra_are_positive() {
-        let solid = MixedSolidMesh::structured_box([0.0; 3], [1.0; 3], [1, 1, 1], Shape::Prism).unwrap();
+        let solid = CurvedMesh::brick([0.0; 3], [1.0; 3], [1, 1, 1], Shape::Prism).unwrap();
         let cut = CutSolid::new(solid);
         assert_eq!(cut.cells().len(), 6);
         assert!(cut.invalid_cells(cut.nodes()).is_empty());
@@ -225,8 +210,8 @@ mod tests {
         assert!(!cells_bad.is_empty());
         // folded, not undecided: det J takes a negative value there
         for &c in &cells_bad {
-            let ctrl: Vec<[f64; 3]> = cut.lattice[c].iter().map(|&n| at[n]).collect();
-            let cert = cut.certifiers.of(cut.lattice.shape(c)).certify(&ctrl, &Default::default());
+            let ctrl: Vec<[f64; 3]> = cut.mesh.cells[c].iter().map(|&n| at[n]).collect();
+            let cert = cut.certifiers.of(cut.mesh.cells.shape(c)).certify(&ctrl, &Default::default());
             assert!(cert.min_det_upper < 0.0, "{cert:?}");
         }
         let of_bad: Vec<usize> = (0..cut.owner().len()).filter(|&t| cells_bad.contains(&cut.owner()[t])).collect();

@@ -14,7 +14,7 @@ use crate::mesh::Cells;
 use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, subdivide_mixed, subdivide_mixed_solid, RefineMesh, Settle, SettlePlan, Subdividable, Subdivision, ALG2_BAND};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, THIN_ASPECT, THIN_TOLERANCE};
-use crate::mesh::{CurvedBoundary, CurvedMesh, MixedPlaneMesh, MixedSolidMesh};
+use crate::mesh::{CurvedBoundary, CurvedMesh};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -763,36 +763,35 @@ where
     curve_subdivided(&sub, (coarse.names(), aspect, clock), parts, opts, progress)
 }
 
-/// [`curve_with_progress`] on a mixed mesh of quads and triangles: the
+/// [`curve_with_progress`] on a linear mesh of quads and triangles: the
 /// elements keep their kinds, Algorithm 2 runs on the triangles of
 /// [`subdivide_mixed`]. Cells that tangle are named by the coarse cell.
-pub fn curve_mixed(coarse: &MixedPlaneMesh, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<2>, CurveError> {
+pub fn curve_mixed(coarse: &CurvedMesh<2>, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<2>, CurveError> {
     check_order(opts.order)?;
     let bad = crate::quality::certify::invalid_mixed_cells(coarse);
     if !bad.is_empty() {
         return Err(CurveError::InvalidCoarse(bad));
     }
-    let facets: Vec<(Vec<usize>, usize)> = coarse.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect();
-    let parts = on_shape_parts(&coarse.nodes, &facets, &coarse.part_names, parts, opts)?;
+    let parts = on_shape_parts(&coarse.nodes, &coarse.linear_facets(), &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed(coarse, opts.order, opts.spacing)?;
-    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
+    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells.to_vecs()), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
 }
 
 /// [`curve_with_progress`] on a solid of tetrahedra and prisms: the
 /// elements keep their kinds, Algorithm 2 runs on the tetrahedra of
 /// [`subdivide_mixed_solid`]. Cells that tangle are named by the coarse
 /// cell.
-pub fn curve_mixed_solid(coarse: &MixedSolidMesh, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<3>, CurveError> {
+pub fn curve_mixed_solid(coarse: &CurvedMesh<3>, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<3>, CurveError> {
     check_order(opts.order)?;
     let bad = coarse.invalid_cells();
     if !bad.is_empty() {
         return Err(CurveError::InvalidCoarse(bad));
     }
-    let parts = on_shape_parts(&coarse.nodes, &coarse.faces, &coarse.part_names, parts, opts)?;
+    let parts = on_shape_parts(&coarse.nodes, &coarse.linear_facets(), &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed_solid(coarse, opts.order, opts.spacing)?;
-    let mut curved = curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))?;
+    let mut curved = curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells.to_vecs()), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))?;
     // the hexes' sub-cell centres, after every element node, were
     // Algorithm 2's alone
     let element_nodes = sub.elements.iter().flatten().max().map_or(0, |&n| n + 1);
@@ -1695,9 +1694,8 @@ mod tests {
     /// same shortest and longest sides; a unit square's ratio is √2.
     #[test]
     fn largest_aspect_takes_cells_of_any_kind() {
-        use crate::mesh::PlaneCell;
         let nodes = [[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 1.0]];
-        let cells = [PlaneCell::Quad([0, 1, 4, 3]), PlaneCell::Triangle([1, 2, 4])];
+        let cells = [vec![0, 1, 4, 3], vec![1, 2, 4]];
         assert!((largest_aspect(&nodes, &cells) - 1.25f64.sqrt() / 0.5).abs() < 1e-15);
         assert!((largest_aspect(&nodes, &[[1, 2, 4]]) - 1.25f64.sqrt() / 0.5).abs() < 1e-15);
         assert!((largest_aspect(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], &[[0, 1, 2, 3]]) - 2f64.sqrt()).abs() < 1e-15);
@@ -1711,7 +1709,6 @@ mod tests {
     /// spacings.
     #[test]
     fn straight_elements_certified_at_order_one_agree_with_order_p() {
-        use crate::mesh::{MixedPlaneMesh, MixedSolidMesh};
         use crate::refine::{subdivide_mixed, subdivide_mixed_solid};
         let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * a.abs().max(b.abs());
         let agree = |(a, qa): &(Vec<Certificate>, CurvedQuality), (b, qb): &(Vec<Certificate>, CurvedQuality), what: &str| {
@@ -1728,12 +1725,12 @@ mod tests {
             }
         };
         let bend3 = |[x, y, z]: [f64; 3]| [x + 0.3 * y * z, y + 0.25 * x * z - 0.05 * z, z + 0.3 * x * y];
-        let mut solids: Vec<(String, MixedSolidMesh)> = [Shape::Hexahedron, Shape::Tetrahedron, Shape::Prism]
+        let mut solids: Vec<(String, CurvedMesh<3>)> = [Shape::Hexahedron, Shape::Tetrahedron, Shape::Prism]
             .into_iter()
-            .map(|k| (format!("{k:?}"), MixedSolidMesh::structured_box([0.0; 3], [1.0; 3], [2, 2, 2], k).unwrap()))
+            .map(|k| (format!("{k:?}"), CurvedMesh::brick([0.0; 3], [1.0; 3], [2, 2, 2], k).unwrap()))
             .collect();
-        solids.push(("hexes and prisms".into(), MixedSolidMesh::hex_prism_box([0.0; 3], [1.0; 3], [2, 2, 2])));
-        let mut plane = MixedPlaneMesh::structured_box([0.0; 2], [1.0; 2], 3, 3);
+        solids.push(("hexes and prisms".into(), CurvedMesh::hex_prism_box([0.0; 3], [1.0; 3], [2, 2, 2])));
+        let mut plane = CurvedMesh::checkerboard([0.0; 2], [1.0; 2], 3, 3);
         for x in &mut plane.nodes {
             *x = [x[0] + 0.2 * x[1] * x[1], x[1] + 0.15 * x[0] * x[1]];
         }
@@ -1766,7 +1763,6 @@ mod tests {
     /// quads and triangles at p = 3.
     #[test]
     fn the_mesh_extremes_are_bracketed_as_if_every_element_were() {
-        use crate::mesh::{MixedPlaneMesh, MixedSolidMesh};
         use crate::refine::{subdivide_mixed, subdivide_mixed_solid};
         fn check<const D: usize>(mesh: &CurvedMesh<D>, what: &str, loose_differs: bool) {
             let certifiers = Certifiers::new(&mesh.shapes(), mesh.p, mesh.spacing).unwrap();
@@ -1786,11 +1782,11 @@ mod tests {
             assert!(again > 0 && 4 * again <= mesh.cells.len(), "{what}: {again} of {} bracketed again", mesh.cells.len());
         }
         let bend = |[x, y, z]: [f64; 3]| [x + 0.2 * (y * y - z) * x, y + 0.15 * x * x * z, z + 0.25 * x * y * y];
-        let coarse = MixedSolidMesh::structured_box([0.0; 3], [1.0; 3], [3, 3, 3], Shape::Hexahedron).unwrap();
+        let coarse = CurvedMesh::brick([0.0; 3], [1.0; 3], [3, 3, 3], Shape::Hexahedron).unwrap();
         let (sub, _) = subdivide_mixed_solid(&coarse, 3, Spacing::Equispaced).unwrap();
         let nodes = sub.fine.nodes.iter().map(|&x| bend(x)).collect();
         check(&fine_mesh(&sub, &coarse.part_names, Spacing::Equispaced, nodes), "hexes", true);
-        let plane = MixedPlaneMesh::structured_box([0.0; 2], [1.0; 2], 4, 4);
+        let plane = CurvedMesh::checkerboard([0.0; 2], [1.0; 2], 4, 4);
         let (sub, _) = subdivide_mixed(&plane, 3, Spacing::Equispaced).unwrap();
         let nodes = sub.fine.nodes.iter().map(|&[x, y]| [x + 0.05 * (7.0 * y).sin(), y + 0.05 * (6.0 * x).sin()]).collect();
         check(&fine_mesh(&sub, &plane.part_names, Spacing::Equispaced, nodes), "quads and triangles", false);

@@ -6,7 +6,8 @@
 //! which is how the file writers take meshes of any order.
 
 use super::element::basis::{tensor_map, Basis1d};
-use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
+use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, linear_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
+use smallvec::SmallVec;
 use super::element::{prism, pyramid, simplex, Shape};
 use super::blocks::Cells;
 use super::{PlaneMesh, SolidMesh};
@@ -364,19 +365,6 @@ impl CurvedMesh<2> {
     }
 }
 
-impl CurvedMesh<2> {
-    /// The linear mesh of quads and triangles as the order-1 case (see
-    /// [`CurvedMesh::from_quads`]); its `shape` is the first cell's.
-    pub fn from_mixed(m: &super::MixedPlaneMesh) -> Self {
-        let quad = gmsh_quad_order(1).expect("order 1");
-        let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| if c.shape() == Shape::Quadrilateral { from_format(&quad, c.nodes()) } else { c.nodes().to_vec() }).collect();
-        let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
-        let shape = m.cells.first().map_or(Shape::Quadrilateral, |c| c.shape());
-        let cells = Cells::from_cells(2, 1, shape, cells);
-        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
-    }
-}
-
 impl CurvedMesh<3> {
     /// The linear hex or tetrahedral mesh as the order-1 case (see
     /// [`CurvedMesh::from_quads`]; a tetrahedron's corners are its lattice
@@ -392,28 +380,76 @@ impl CurvedMesh<3> {
     }
 }
 
-impl CurvedMesh<3> {
-    /// The linear mixed solid as the order-1 case (a tetrahedron's and a
-    /// prism's vertices are their lattice order; a hex goes into tensor
-    /// order, a pyramid into its lattice order (base corners 0, 1, 3, 2),
-    /// a quad face into tensor order); its `shape` is the first cell's.
-    pub fn from_mixed_solid(m: &super::MixedSolidMesh) -> Self {
-        let (quad, hex, pyr) = (gmsh_quad_order(1).expect("order 1"), gmsh_hex_order(1).expect("order 1"), pyramid::gmsh_pyramid_order(1).expect("order 1"));
-        let cells: Vec<Vec<usize>> = m
-            .cells
-            .iter()
-            .map(|c| match c {
-                super::SolidCell::Hex(n) => from_format(&hex, n),
-                super::SolidCell::Pyramid(n) => from_format(&pyr, n),
-                _ => c.nodes().to_vec(),
+/// The linear mesh of cells of any kinds (`p = 1`), as a file gives it:
+/// each cell by its vertices in its kind's vertex order
+/// ([`Shape::vertices`], Gmsh's), each boundary element by its corners in
+/// cyclic order. Its nodes lists are those in [`linear_order`].
+impl<const D: usize> CurvedMesh<D> {
+    /// The linear mesh of `cells` (kind and vertices) in the order given,
+    /// so that cell `c` is the file's element `c`, bounded by `facets`
+    /// (corners and part); its `shape` is the first cell's.
+    pub fn linear<C: AsRef<[usize]>, F: AsRef<[usize]>>(
+        nodes: Vec<[f64; D]>,
+        cells: impl IntoIterator<Item = (Shape, C)>,
+        facets: impl IntoIterator<Item = (F, usize)>,
+        part_names: Vec<String>,
+    ) -> Self {
+        let cells: Cells = cells.into_iter().map(|(shape, v)| (shape, reordered(shape, v.as_ref()))).collect();
+        let shape = cells.blocks().first().map_or(if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron }, |b| b.shape);
+        let mut mesh = CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes, cells, boundary: Vec::new(), part_names };
+        mesh.set_linear_facets(facets);
+        mesh
+    }
+
+    /// The vertices of cell `c` of a linear mesh, in its kind's vertex
+    /// order: [`CurvedMesh::linear`]'s input.
+    pub fn vertices(&self, c: usize) -> SmallVec<[usize; 8]> {
+        debug_assert_eq!(self.p, 1, "the vertices of a linear mesh's cell");
+        reordered(self.cells.shape(c), &self.cells[c])
+    }
+
+    /// Gives cell `c` of a linear mesh the vertices `v` (its kind's vertex
+    /// order), as [`CurvedMesh::linear`] would.
+    pub fn set_vertices(&mut self, c: usize, v: &[usize]) {
+        let shape = self.cells.shape(c);
+        self.cells[c].copy_from_slice(&reordered(shape, v));
+    }
+
+    /// The boundary elements of a linear mesh as corners in cyclic order
+    /// and part: [`CurvedMesh::linear`]'s input.
+    pub fn linear_facets(&self) -> Vec<(Vec<usize>, usize)> {
+        debug_assert_eq!(self.p, 1, "the corners of a linear mesh's boundary");
+        self.boundary.iter().map(|b| (reordered(self.facet_shape(b), &b.nodes).to_vec(), b.part)).collect()
+    }
+
+    /// Replaces the boundary elements by `facets` (corners in cyclic order
+    /// and part) of a linear mesh.
+    pub fn set_linear_facets<F: AsRef<[usize]>>(&mut self, facets: impl IntoIterator<Item = (F, usize)>) {
+        self.boundary = facets
+            .into_iter()
+            .map(|(f, part)| {
+                let f = f.as_ref();
+                let shape = Shape::with_nodes(D - 1, 1, f.len()).unwrap_or(Shape::Line);
+                CurvedBoundary { nodes: reordered(shape, f).to_vec(), part }
             })
             .collect();
-        let face = |f: &[usize]| if f.len() == 4 { from_format(&quad, f) } else { f.to_vec() };
-        let boundary = m.faces.iter().map(|(f, part)| CurvedBoundary { nodes: face(f), part: *part }).collect();
-        let shape = m.cells.first().map_or(Shape::Prism, |c| c.shape());
-        let cells = Cells::from_cells(3, 1, shape, cells);
-        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
+
+    /// How many cells are of `shape`.
+    pub fn count(&self, shape: Shape) -> usize {
+        self.cells.blocks().iter().filter(|b| b.shape == shape).map(|b| b.len()).sum()
+    }
+}
+
+/// The order-1 nodes `v` of a `shape` in the other order: vertex order
+/// from node order and back ([`linear_order`] is its own inverse).
+fn reordered(shape: Shape, v: &[usize]) -> SmallVec<[usize; 8]> {
+    let order = linear_order(shape);
+    if order.len() != v.len() {
+        // not an order-1 cell of its kind: as it is, for `validate` to name
+        return SmallVec::from_slice(v);
+    }
+    order.iter().map(|&k| v[k]).collect()
 }
 
 #[cfg(test)]

@@ -116,6 +116,21 @@ pub fn corner_indices(shape: Shape, p: usize) -> Vec<usize> {
     (0..1usize << d).map(|bits| (0..d).map(|k| ((bits >> k) & 1) * p * (p + 1).pow(k as u32)).sum()).collect()
 }
 
+/// Where each vertex of `shape` sits in its order-1 node list, in the
+/// shape's vertex order ([`Shape::vertices`], Gmsh's): a quad's and a
+/// hex's tensor order and a pyramid's lattice order list the corners of
+/// a square lexicographically, Gmsh cyclically. Each is its own inverse,
+/// so it also takes the vertices to the node list.
+pub fn linear_order(shape: Shape) -> &'static [usize] {
+    match shape {
+        Shape::Quadrilateral => &[0, 1, 3, 2],
+        Shape::Hexahedron => &[0, 1, 3, 2, 4, 5, 7, 6],
+        Shape::Pyramid => &[0, 1, 3, 2, 4],
+        // a simplex's and a prism's vertices are their lattice's first
+        _ => &[0, 1, 2, 3, 4, 5][..shape.vertices().len()],
+    }
+}
+
 /// The `p + 1` node positions in `[0,1]`, increasing, for `p` in
 /// `1..=MAX_ORDER`. Both sets contain 0 and 1 and are symmetric about ½
 /// (`t[p - i] = 1 - t[i]`, exactly), which the writers rely on when they
@@ -158,6 +173,28 @@ pub fn nodes_1d(p: usize, spacing: Spacing) -> Result<Vec<f64>, HighOrderError> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The order-1 vertex order is the one the kinds' own tables give
+    /// (Gmsh's quad and hex orders, the simplex, prism and pyramid
+    /// lattices) and its own inverse.
+    #[test]
+    fn linear_order_is_each_kinds_vertex_table() {
+        let identity = |n: usize| (0..n).collect::<Vec<_>>();
+        let quad = from_format(&gmsh_quad_order(1).unwrap(), &identity(4));
+        let hex = from_format(&gmsh_hex_order(1).unwrap(), &identity(8));
+        assert_eq!(linear_order(Shape::Quadrilateral), quad);
+        assert_eq!(linear_order(Shape::Hexahedron), hex);
+        assert_eq!(linear_order(Shape::Pyramid), pyramid::vertex_nodes(1));
+        assert_eq!(linear_order(Shape::Prism), prism::vertex_nodes(1));
+        for s in [Shape::Triangle, Shape::Tetrahedron] {
+            assert_eq!(linear_order(s), simplex::vertex_nodes(s, 1));
+        }
+        for s in [Shape::Line, Shape::Triangle, Shape::Quadrilateral, Shape::Tetrahedron, Shape::Prism, Shape::Pyramid, Shape::Hexahedron] {
+            let o = linear_order(s);
+            assert_eq!(o.len(), s.num_nodes(1), "{s:?}");
+            assert!((0..o.len()).all(|k| o[o[k]] == k), "{s:?}");
+        }
+    }
 
     #[test]
     fn nodes_are_symmetric_and_include_ends() {

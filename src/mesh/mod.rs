@@ -14,4 +14,4 @@ pub mod mixed;
 pub use blocks::{Block, Cells};
 pub use curved::{CurvedBoundary, CurvedMesh};
 pub use linear::*;
-pub use mixed::{MixedPlaneMesh, MixedSolidMesh, PlaneCell, SolidCell};
+pub use mixed::{cell_faces, corner_jacobians};

@@ -612,16 +612,16 @@ pub fn invalid_cells<const D: usize, const N: usize>(cells: &[[usize; N]], nodes
     (0..cells.len()).into_par_iter().with_min_len(256).filter(|&c| !linear_is_valid(&cells[c].map(|n| nodes[n]))).collect()
 }
 
-/// The cells of a mixed plane mesh not certified valid by
-/// [`linear_is_valid`] (a quad with det J not positive at a corner, a
-/// triangle of non-positive area), in mesh order.
-pub fn invalid_mixed_cells(mesh: &crate::mesh::MixedPlaneMesh) -> Vec<usize> {
-    use crate::mesh::PlaneCell;
-    let at = |n: &usize| mesh.nodes[*n];
+/// The cells of a linear plane mesh of quads and triangles not certified
+/// valid by [`linear_is_valid`] (a quad with det J not positive at a
+/// corner, a triangle of non-positive area), in mesh order.
+pub fn invalid_mixed_cells(mesh: &crate::mesh::CurvedMesh<2>) -> Vec<usize> {
+    let at = |n: usize| mesh.nodes[n];
     (0..mesh.cells.len())
-        .filter(|&c| match &mesh.cells[c] {
-            PlaneCell::Triangle(t) => !linear_is_valid(&t.each_ref().map(at)),
-            PlaneCell::Quad(q) => !linear_is_valid(&q.each_ref().map(at)),
+        .filter(|&c| match *mesh.vertices(c).as_slice() {
+            [a, b, d] => !linear_is_valid(&[a, b, d].map(at)),
+            [a, b, d, e] => !linear_is_valid(&[a, b, d, e].map(at)),
+            ref v => unreachable!("a plane cell of {} vertices", v.len()),
         })
         .collect()
 }

@@ -15,7 +15,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, MixedPlaneMesh, MixedSolidMesh, PlaneCell, PlaneMesh, SolidCell, SolidMesh};
+use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, PlaneMesh, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -86,22 +86,19 @@ impl Raw {
 
     /// The linear plane mesh of quads and triangles together (z must be
     /// 0), cells in tag order, and its cells' element tags.
-    pub fn mixed_plane_mesh(&self) -> Result<(MixedPlaneMesh, Vec<u64>), MshError> {
+    pub fn mixed_plane_mesh(&self) -> Result<(CurvedMesh<2>, Vec<u64>), MshError> {
         self.check(LINEAR[0])?;
         self.in_plane()?;
         self.plane_kinds()?;
-        let cells = self.by_tag(2);
-        let (part_names, edges) = self.boundary(1);
-        let cell = |n: &[usize]| match n.len() {
-            3 => PlaneCell::Triangle([n[0], n[1], n[2]]),
-            _ => PlaneCell::Quad([n[0], n[1], n[2], n[3]]),
-        };
-        let mesh = MixedPlaneMesh {
-            nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
-            cells: cells.iter().map(|c| cell(c.2)).collect(),
-            edges: edges.iter().map(|&(nodes, part, _)| BoundaryEdge { nodes: nodes.try_into().expect("2-node lines"), part }).collect(),
-            part_names,
-        };
+        self.linear_mesh(self.nodes.iter().map(|p| [p[0], p[1]]).collect())
+    }
+
+    /// The linear mesh of dimension `D` on `nodes`, cells in tag order,
+    /// and its cells' element tags (the kinds checked by the caller).
+    fn linear_mesh<const D: usize>(&self, nodes: Vec<[f64; D]>) -> Result<(CurvedMesh<D>, Vec<u64>), MshError> {
+        let cells = self.by_tag(D);
+        let (part_names, facets) = self.boundary(D - 1);
+        let mesh = CurvedMesh::linear(nodes, cells.iter().map(|c| (c.1.kind.shape, c.2)), facets.iter().map(|&(nodes, part, _)| (nodes, part)), part_names);
         Ok((mesh, cells.iter().map(|c| c.0).collect()))
     }
 
@@ -193,18 +190,10 @@ impl Raw {
     /// The linear solid of tetrahedra, prisms, pyramids and hexes
     /// (boundary triangles and quads), cells in tag order, and its cells'
     /// element tags.
-    pub fn mixed_solid_mesh(&self) -> Result<(MixedSolidMesh, Vec<u64>), MshError> {
+    pub fn mixed_solid_mesh(&self) -> Result<(CurvedMesh<3>, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
         self.solid_kinds()?;
-        let cells = self.by_tag(3);
-        let (part_names, faces) = self.boundary(2);
-        let mesh = MixedSolidMesh {
-            nodes: self.nodes.clone(),
-            cells: cells.iter().map(|c| SolidCell::from_nodes(c.2).expect("a solid kind's vertex count")).collect(),
-            faces: faces.iter().map(|&(nodes, part, _)| (nodes.to_vec(), part)).collect(),
-            part_names,
-        };
-        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+        self.linear_mesh(self.nodes.clone())
     }
 
     /// The mesh of the first cell's order, nodes in tensor order, and its

@@ -358,10 +358,10 @@ pub enum AnyMesh {
     Hexes(HexMesh),
     /// Linear tetrahedra.
     Tetrahedra(TetMesh),
-    /// Linear quads and triangles together.
-    Mixed2(crate::mesh::MixedPlaneMesh),
+    /// Linear quads and triangles together (the order-1 case).
+    Mixed2(CurvedMesh<2>),
     /// Linear solids of more than one kind, or of prisms or pyramids.
-    Mixed3(crate::mesh::MixedSolidMesh),
+    Mixed3(CurvedMesh<3>),
     /// Quads or triangles of order 2..=4.
     Curved2(CurvedMesh<2>),
     /// Hexes or tetrahedra of order 2..=4.

@@ -1464,24 +1464,24 @@ fn prisms_of_every_order_and_spacing_are_drawn() {
 /// of its triangles (the mixed solid of `refine`'s conformity test), at
 /// order `p`: the linear mesh, or the subdivision's elements.
 fn hex_pyramid_tets(p: usize) -> CurvedMesh<3> {
-    use crate::mesh::{MixedSolidMesh, SolidCell};
+    use crate::mesh::cell_faces;
     let nodes = vec![
         [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
         [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [2.0, 0.0, 1.0], [2.0, 1.0, 1.0], [0.5, 0.5, 1.6],
         [0.5, -0.4, 1.3], [1.4, 0.5, 1.3], [0.5, 1.4, 1.3], [-0.4, 0.5, 1.3],
     ];
-    let mut cells = vec![SolidCell::Hex([0, 1, 2, 3, 4, 5, 6, 7]), SolidCell::Hex([1, 8, 9, 2, 5, 10, 11, 6]), SolidCell::Pyramid([4, 5, 6, 7, 12])];
-    cells.extend([(4, 5, 13), (5, 6, 14), (6, 7, 15), (7, 4, 16)].map(|(a, b, out)| SolidCell::Tet([a, b, 12, out])));
+    let mut cells = vec![(Shape::Hexahedron, vec![0, 1, 2, 3, 4, 5, 6, 7]), (Shape::Hexahedron, vec![1, 8, 9, 2, 5, 10, 11, 6]), (Shape::Pyramid, vec![4, 5, 6, 7, 12])];
+    cells.extend([(4, 5, 13), (5, 6, 14), (6, 7, 15), (7, 4, 16)].map(|(a, b, out)| (Shape::Tetrahedron, vec![a, b, 12, out])));
     let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
-    for f in cells.iter().flat_map(SolidCell::faces) {
+    for f in cells.iter().flat_map(|(shape, v)| cell_faces(*shape, v)) {
         let mut k = f.clone();
         k.sort_unstable();
         count.entry(k).or_insert((0, f)).0 += 1;
     }
-    let faces = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
-    let coarse = MixedSolidMesh { nodes, cells, faces, part_names: vec!["all".into()] };
+    let faces: Vec<(Vec<usize>, usize)> = count.into_values().filter(|c| c.0 == 1).map(|c| (c.1, 0)).collect();
+    let coarse = CurvedMesh::linear(nodes, cells, faces, vec!["all".into()]);
     if p == 1 {
-        return CurvedMesh::from_mixed_solid(&coarse);
+        return coarse;
     }
     let (s, _) = crate::refine::subdivide_mixed_solid(&coarse, p, Spacing::Equispaced).unwrap();
     CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: s.elements.clone(), boundary: vec![], part_names: vec![] }
