@@ -458,16 +458,20 @@ fn quality_of(path: &Path) -> Result<Figures> {
     let bytes = std::fs::read(path).map_err(|e| named(MshError::Io { path: path.to_path_buf(), source: e }))?;
     let read = deformesh::io::msh::parse_any(&bytes, false).map_err(named)?;
     let tags = read.cell_tags;
+    // linear quads, triangles, hexes or tetrahedra alone: Algorithm 1's
+    // figures of them; else the certificate's (linear meshes of several
+    // kinds as the order-1 case of the mesh of any order)
     let mut q = match read.mesh {
-        AnyMesh::Curved2(mesh) => return curved_figures((mesh, tags)),
-        AnyMesh::Curved3(mesh) => return curved_figures((mesh, tags)),
-        // the certificate's figures, the order-1 case of the mesh of any order
-        AnyMesh::Mixed2(m) => return curved_figures((m, tags)),
-        AnyMesh::Mixed3(m) => return curved_figures((m, tags)),
-        AnyMesh::Quads(m) => deformesh::quality::mesh_quality(&m),
-        AnyMesh::Triangles(m) => deformesh::quality::mesh_quality(&m),
-        AnyMesh::Hexes(m) => deformesh::quality::hex_mesh_quality(&m),
-        AnyMesh::Tetrahedra(m) => deformesh::quality::tet_mesh_quality(&m),
+        AnyMesh::Plane(m) => match (m.to_plane::<4>(), m.to_plane::<3>()) {
+            (Some(quads), _) => deformesh::quality::mesh_quality(&quads),
+            (_, Some(triangles)) => deformesh::quality::mesh_quality(&triangles),
+            _ => return curved_figures((m, tags)),
+        },
+        AnyMesh::Solid(m) => match (m.to_solid::<8, 4>(), m.to_solid::<4, 3>()) {
+            (Some(hexes), _) => deformesh::quality::hex_mesh_quality(&hexes),
+            (_, Some(tets)) => deformesh::quality::tet_mesh_quality(&tets),
+            _ => return curved_figures((m, tags)),
+        },
     };
     q.invalid_cells = to_tags(&q.invalid_cells, &tags);
     Ok(Figures::Linear(q))

@@ -662,7 +662,7 @@ impl Case {
         };
         solid.boundary.iter_mut().for_each(|b| b.part = face_part[b.part]);
         solid.part_names = names;
-        if let Some(mesh) = solid.to_tet_mesh() {
+        if let Some(mesh) = solid.to_solid() {
             check(&mut solid_points(&mesh))?;
             return Ok(AnySetup::Tet(Setup { name, mesh, parts, field, options, output, highorder }));
         }

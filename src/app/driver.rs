@@ -846,15 +846,21 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.as_ref().and_then(|g| g.shape_tolerance).unwrap_or(0.0));
     let fine_cells = |d: u32| job.options.order.max(1).pow(d);
     let tags = &read.cell_tags;
+    let input = (&job, &read.layout);
+    // a mesh of one kind goes to Algorithm 1's kernels compiled for it;
+    // several kinds (and prisms, pyramids) through their simplices, where
+    // curve_mixed names tangled cells by their coarse cell
     let result = match read.mesh {
-        AnyMesh::Hexes(mesh) => curve_solid(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
-        AnyMesh::Tetrahedra(mesh) => curve_solid(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
-        AnyMesh::Quads(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
-        AnyMesh::Triangles(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
-        // curve_mixed names tangled cells by their coarse cell
-        AnyMesh::Mixed2(mesh) => curve_plane(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
-        AnyMesh::Mixed3(mesh) => curve_mixed_solid(mesh, &binding, (&job, &read.layout), &mut progress).map_err(|e| by_tag(e, tags, 1)),
-        AnyMesh::Curved2(_) | AnyMesh::Curved3(_) => unreachable!("parse_any(_, true) reads linear meshes only"),
+        AnyMesh::Solid(mesh) => match (mesh.to_solid::<8, 4>(), mesh.to_solid::<4, 3>()) {
+            (Some(hexes), _) => curve_solid(hexes, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
+            (_, Some(tets)) => curve_solid(tets, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(3))),
+            _ => curve_mixed_solid(mesh, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, 1)),
+        },
+        AnyMesh::Plane(mesh) => match (mesh.to_plane::<4>(), mesh.to_plane::<3>()) {
+            (Some(quads), _) => curve_plane(quads, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
+            (_, Some(triangles)) => curve_plane(triangles, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, fine_cells(2))),
+            _ => curve_plane(mesh, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, 1)),
+        },
     };
     result.map_err(|e| with_node_tag(e, &read.node_tags))
 }

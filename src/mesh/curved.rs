@@ -365,6 +365,48 @@ impl CurvedMesh<2> {
     }
 }
 
+impl CurvedMesh<2> {
+    /// The linear mesh as Algorithm 1's mesh of one kind, `N` vertices
+    /// per cell (quads 4, triangles 3; each cell's vertices counter-
+    /// clockwise as the file gives them), whose kernels are compiled for
+    /// that kind: `None` unless p = 1 and every cell is of that kind.
+    pub fn to_plane<const N: usize>(&self) -> Option<PlaneMesh<N>> {
+        let kind = if N == 3 { Shape::Triangle } else { Shape::Quadrilateral };
+        if self.p != 1 || N != kind.num_nodes(1) || self.cells.blocks().iter().any(|b| b.shape != kind) || self.boundary.iter().any(|b| b.nodes.len() != 2) {
+            return None;
+        }
+        let cells = (0..self.cells.len())
+            .map(|c| {
+                let v = self.vertices(c);
+                std::array::from_fn(|k| v[k])
+            })
+            .collect();
+        let edges = self.boundary.iter().map(|b| super::BoundaryEdge { nodes: [b.nodes[0], b.nodes[1]], part: b.part }).collect();
+        Some(PlaneMesh { nodes: self.nodes.clone(), cells, edges, part_names: self.part_names.clone() })
+    }
+}
+
+impl CurvedMesh<3> {
+    /// The linear mesh as Algorithm 1's mesh of one kind (see
+    /// [`CurvedMesh::to_plane`]): hexes (`N = 8`, quad faces `K = 4`) or
+    /// tetrahedra (`N = 4`, `K = 3`); `None` unless p = 1 and every cell
+    /// and face is of those kinds.
+    pub fn to_solid<const N: usize, const K: usize>(&self) -> Option<SolidMesh<N, K>> {
+        let kind = if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron };
+        if self.p != 1 || N != kind.num_nodes(1) || self.cells.blocks().iter().any(|b| b.shape != kind) || self.boundary.iter().any(|b| b.nodes.len() != K) {
+            return None;
+        }
+        let cells = (0..self.cells.len())
+            .map(|c| {
+                let v = self.vertices(c);
+                std::array::from_fn(|k| v[k])
+            })
+            .collect();
+        let faces = self.linear_facets().into_iter().map(|(f, part)| super::BoundaryFace { nodes: std::array::from_fn(|k| f[k]), part }).collect();
+        Some(SolidMesh { nodes: self.nodes.clone(), cells, faces, part_names: self.part_names.clone() })
+    }
+}
+
 impl CurvedMesh<3> {
     /// The linear hex or tetrahedral mesh as the order-1 case (see
     /// [`CurvedMesh::from_quads`]; a tetrahedron's corners are its lattice

@@ -279,17 +279,6 @@ impl CurvedMesh<3> {
         CurvedMesh::linear(nodes, cells, faces, part_names)
     }
 
-    /// The linear mesh as a [`TetMesh`] if all its cells are tetrahedra
-    /// and its boundary faces triangles.
-    pub fn to_tet_mesh(&self) -> Option<TetMesh> {
-        if self.p != 1 || self.shapes() != [Shape::Tetrahedron] {
-            return None;
-        }
-        let cells = self.cells.iter().map(|t| [t[0], t[1], t[2], t[3]]).collect();
-        let faces = self.boundary.iter().map(|b| Some(BoundaryFace { nodes: <[usize; 3]>::try_from(b.nodes.as_slice()).ok()?, part: b.part })).collect::<Option<Vec<_>>>()?;
-        Some(TetMesh { nodes: self.nodes.clone(), cells, faces, part_names: self.part_names.clone() })
-    }
-
     /// The linear mesh cut into tetrahedra (prisms by [`prism_tets`],
     /// pyramids by [`pyramid_tets`], hexes by [`hex_tets`] about a new
     /// node at each one's centre, after the mesh's nodes), its boundary
@@ -462,8 +451,8 @@ mod tests {
             }
         }
         assert_eq!(CurvedMesh::brick(lo, hi, n, Shape::Triangle), None);
-        assert!(CurvedMesh::brick(lo, hi, n, Shape::Tetrahedron).unwrap().to_tet_mesh().is_some());
-        assert!(CurvedMesh::brick(lo, hi, n, Shape::Prism).unwrap().to_tet_mesh().is_none());
+        assert!(CurvedMesh::brick(lo, hi, n, Shape::Tetrahedron).unwrap().to_solid::<4, 3>().is_some());
+        assert!(CurvedMesh::brick(lo, hi, n, Shape::Prism).unwrap().to_solid::<4, 3>().is_none());
     }
 
     /// The corner Jacobians of the reference pyramid and hex are 1, scale

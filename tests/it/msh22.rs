@@ -6,7 +6,7 @@ use crate::common;
 
 use deformesh::io::layout::Layout;
 use deformesh::io::msh::{layout_text_22, parse_any, AnyMesh, Tagged};
-use deformesh::mesh::element::Spacing;
+use deformesh::mesh::element::{Shape, Spacing};
 use deformesh::mesh::CurvedMesh;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -36,17 +36,16 @@ fn read(file: &Path) -> Tagged {
 fn by_tags(t: &Tagged) -> (Vec<(u64, [u64; 3])>, Vec<Vec<u64>>, Vec<(String, Vec<u64>)>) {
     let tag = |n: &usize| t.node_tags[*n];
     let (coords, cells, boundary): (Vec<[f64; 3]>, Vec<Vec<u64>>, Vec<(String, Vec<u64>)>) = match &t.mesh {
-        AnyMesh::Quads(m) => (
+        AnyMesh::Plane(m) => (
             m.nodes.iter().map(|x| [x[0], x[1], 0.0]).collect(),
             m.cells.iter().map(|c| c.iter().map(tag).collect()).collect(),
-            m.edges.iter().map(|e| (m.part_names[e.part].clone(), e.nodes.iter().map(tag).collect())).collect(),
+            m.boundary.iter().map(|b| (m.part_names[b.part].clone(), b.nodes.iter().map(tag).collect())).collect(),
         ),
-        AnyMesh::Hexes(m) => (
+        AnyMesh::Solid(m) => (
             m.nodes.clone(),
             m.cells.iter().map(|c| c.iter().map(tag).collect()).collect(),
-            m.faces.iter().map(|f| (m.part_names[f.part].clone(), f.nodes.iter().map(tag).collect())).collect(),
+            m.boundary.iter().map(|b| (m.part_names[b.part].clone(), b.nodes.iter().map(tag).collect())).collect(),
         ),
-        _ => panic!("a linear mesh expected"),
     };
     let mut nodes: Vec<(u64, [u64; 3])> = t.node_tags.iter().zip(&coords).map(|(&n, x)| (n, x.map(f64::to_bits))).collect();
     nodes.sort_unstable();
@@ -63,9 +62,8 @@ fn same_mesh(v41: &Path, v22: &Path) -> Tagged {
     assert_eq!(ba, bb, "boundary elements with their parts");
     assert_eq!(a.cell_tags, b.cell_tags);
     let parts = |t: &Tagged| match &t.mesh {
-        AnyMesh::Quads(m) => m.part_names.clone(),
-        AnyMesh::Hexes(m) => m.part_names.clone(),
-        _ => unreachable!(),
+        AnyMesh::Plane(m) => m.part_names.clone(),
+        AnyMesh::Solid(m) => m.part_names.clone(),
     };
     assert_eq!(parts(&a), parts(&b));
     // Gmsh writes the nodes in the same order in both: the meshes are equal
@@ -162,7 +160,8 @@ fn gmsh_twins_of_a_quad_mesh_read_and_curve_alike() {
     common::run_script("cylinder_bl.py", &["0.01", "0.15", made.to_str().unwrap()]);
     let (v41, v22) = twins(&made, dir.path(), "cylinder");
     let t = same_mesh(&v41, &v22);
-    let AnyMesh::Quads(m) = &t.mesh else { panic!("quads expected") };
+    let AnyMesh::Plane(m) = &t.mesh else { panic!("a plane mesh expected") };
+    assert_eq!((m.p, m.shapes()), (1, vec![Shape::Quadrilateral]));
     assert_eq!(m.part_names, vec!["wall".to_string(), "farfield".to_string()]);
     for p in [2, 3] {
         let r = same_curving::<2>(dir.path(), &v41, &v22, CYLINDER, p, "wall");
@@ -179,7 +178,8 @@ fn gmsh_twins_of_a_hex_mesh_read_and_curve_alike() {
     let dir = tempfile::tempdir().unwrap();
     let (v41, v22) = twins(&data("ball_octant_hex.msh"), dir.path(), "ball");
     let t = same_mesh(&v41, &v22);
-    let AnyMesh::Hexes(m) = &t.mesh else { panic!("hexes expected") };
+    let AnyMesh::Solid(m) = &t.mesh else { panic!("a solid mesh expected") };
+    assert_eq!((m.p, m.shapes()), (1, vec![Shape::Hexahedron]));
     assert_eq!(m.part_names.len(), 4, "{:?}", m.part_names);
     let r = same_curving::<3>(dir.path(), &v41, &v22, BALL, 2, "sphere");
     let q = &r["quality"];

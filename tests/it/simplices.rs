@@ -128,7 +128,7 @@ fn a_mixed_quad_and_triangle_layer_curves_validly_at_p2_p3_p4_and_gmsh_agrees() 
         let (file, gmsh) = gmsh_mesh(dir.path(), "triangle_meshes.py", "mixed", "mixed.msh", &["--size", "0.0625", "--far", "0.25", "--order", &p.to_string()]);
         let gmsh = gmsh.unwrap();
         let input = deformesh::io::msh::parse_any(&std::fs::read(&file).unwrap(), true).unwrap();
-        let deformesh::io::msh::AnyMesh::Mixed2(linear) = input.mesh else { panic!("not read as a mixed mesh") };
+        let deformesh::io::msh::AnyMesh::Plane(linear) = input.mesh else { panic!("not read as a plane mesh") };
         let kinds = [Shape::Triangle, Shape::Quadrilateral].map(|s| linear.count(s));
         assert!(kinds[0] > 500 && kinds[1] > 500, "{kinds:?}");
         let (r, out) = curve(dir.path(), &file, common::WALL_CIRCLE, p);

@@ -15,7 +15,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{BoundaryEdge, BoundaryFace, CurvedBoundary, CurvedMesh, PlaneMesh, SolidMesh};
+use crate::mesh::{CurvedBoundary, CurvedMesh, PlaneMesh, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -73,24 +73,26 @@ impl Raw {
         self.check(LINEAR[0])?;
         self.in_plane()?;
         self.one_shape(2, if N == 3 { Shape::Triangle } else { Shape::Quadrilateral })?;
-        let cells = self.by_tag(2);
-        let (part_names, edges) = self.boundary(1);
-        let mesh = PlaneMesh {
-            nodes: self.nodes.iter().map(|p| [p[0], p[1]]).collect(),
-            cells: cells.iter().map(|c| c.2.try_into().expect("one shape of N nodes")).collect(),
-            edges: edges.iter().map(|&(nodes, part, _)| BoundaryEdge { nodes: nodes.try_into().expect("2-node lines"), part }).collect(),
-            part_names,
-        };
-        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+        let (mesh, tags) = self.linear_mesh(self.plane_nodes())?;
+        Ok((mesh.to_plane().expect("cells and edges of one kind, checked"), tags))
     }
 
-    /// The linear plane mesh of quads and triangles together (z must be
-    /// 0), cells in tag order, and its cells' element tags.
-    pub fn mixed_plane_mesh(&self) -> Result<(CurvedMesh<2>, Vec<u64>), MshError> {
+    /// The linear plane mesh of quads, triangles or both (z must be 0),
+    /// cells in tag order, and its cells' element tags.
+    pub fn linear_plane(&self) -> Result<(CurvedMesh<2>, Vec<u64>), MshError> {
         self.check(LINEAR[0])?;
         self.in_plane()?;
-        self.plane_kinds()?;
-        self.linear_mesh(self.nodes.iter().map(|p| [p[0], p[1]]).collect())
+        if self.cell_shapes(2).len() > 1 {
+            self.plane_kinds()?;
+        } else {
+            self.one_shape(2, if self.cell_shape(2) == Some(Shape::Triangle) { Shape::Triangle } else { Shape::Quadrilateral })?;
+        }
+        self.linear_mesh(self.plane_nodes())
+    }
+
+    /// The nodes of a plane mesh (z dropped).
+    fn plane_nodes(&self) -> Vec<[f64; 2]> {
+        self.nodes.iter().map(|p| [p[0], p[1]]).collect()
     }
 
     /// The linear mesh of dimension `D` on `nodes`, cells in tag order,
@@ -155,15 +157,8 @@ impl Raw {
     pub fn solid_mesh<const N: usize, const K: usize>(&self) -> Result<(SolidMesh<N, K>, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
         self.one_shape(3, if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron })?;
-        let cells = self.by_tag(3);
-        let (part_names, faces) = self.boundary(2);
-        let mesh = SolidMesh {
-            nodes: self.nodes.clone(),
-            cells: cells.iter().map(|c| c.2.try_into().expect("one shape of N nodes")).collect(),
-            faces: faces.iter().map(|&(nodes, part, _)| BoundaryFace { nodes: nodes.try_into().expect("the cells' face shape"), part }).collect(),
-            part_names,
-        };
-        Ok((mesh, cells.iter().map(|c| c.0).collect()))
+        let (mesh, tags) = self.linear_mesh(self.nodes.clone())?;
+        Ok((mesh.to_solid().expect("cells and faces of one kind, checked"), tags))
     }
 
     /// Fails unless every cell of a mixed solid is a tetrahedron, prism,
@@ -188,11 +183,16 @@ impl Raw {
     }
 
     /// The linear solid of tetrahedra, prisms, pyramids and hexes
-    /// (boundary triangles and quads), cells in tag order, and its cells'
-    /// element tags.
-    pub fn mixed_solid_mesh(&self) -> Result<(CurvedMesh<3>, Vec<u64>), MshError> {
+    /// (boundary triangles and quads; hexes or tetrahedra alone bounded by
+    /// their faces' kind), cells in tag order, and its cells' element
+    /// tags.
+    pub fn linear_solid(&self) -> Result<(CurvedMesh<3>, Vec<u64>), MshError> {
         self.check(LINEAR[1])?;
-        self.solid_kinds()?;
+        if self.is_mixed_solid() {
+            self.solid_kinds()?;
+        } else {
+            self.one_shape(3, if self.cell_shape(3) == Some(Shape::Tetrahedron) { Shape::Tetrahedron } else { Shape::Hexahedron })?;
+        }
         self.linear_mesh(self.nodes.clone())
     }
 

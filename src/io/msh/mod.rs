@@ -29,8 +29,7 @@ use thiserror::Error;
 pub use v22::layout_text_22;
 pub use write::{hex_msh_string, layout_text, msh_string, msh_type, write_hex_msh, write_msh};
 
-use crate::mesh::element::Shape;
-use crate::mesh::{CurvedMesh, HexMesh, QuadMesh, TetMesh, TriMesh};
+use crate::mesh::{CurvedMesh, HexMesh, QuadMesh};
 use read::Accept;
 
 pub use crate::io::layout::DOMAIN_NAME;
@@ -347,25 +346,14 @@ impl<const D: usize> CurvedMesh<D> {
     }
 }
 
-/// A mesh of whichever kind an MSH file holds.
+/// The mesh an MSH file holds, of any kinds and order (p = 1 is the
+/// linear mesh), by its dimension.
 #[derive(Clone, Debug, PartialEq)]
 pub enum AnyMesh {
-    /// Linear quads.
-    Quads(QuadMesh),
-    /// Linear triangles.
-    Triangles(TriMesh),
-    /// Linear hexes.
-    Hexes(HexMesh),
-    /// Linear tetrahedra.
-    Tetrahedra(TetMesh),
-    /// Linear quads and triangles together (the order-1 case).
-    Mixed2(CurvedMesh<2>),
-    /// Linear solids of more than one kind, or of prisms or pyramids.
-    Mixed3(CurvedMesh<3>),
-    /// Quads or triangles of order 2..=4.
-    Curved2(CurvedMesh<2>),
-    /// Hexes or tetrahedra of order 2..=4.
-    Curved3(CurvedMesh<3>),
+    /// Quads, triangles or both.
+    Plane(CurvedMesh<2>),
+    /// Hexes, tetrahedra, prisms and pyramids, of one kind or several.
+    Solid(CurvedMesh<3>),
 }
 
 /// A mesh read by [`parse_any`], with the file's tags for messages.
@@ -389,14 +377,10 @@ pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
     let (mesh, cell_tags) = match (top, order) {
-        (3, 1) if raw.is_mixed_solid() => raw.mixed_solid_mesh().map(|(m, t)| (AnyMesh::Mixed3(m), t))?,
-        (3, 1) if raw.cell_shape(3) == Some(Shape::Tetrahedron) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Tetrahedra(m), t))?,
-        (3, 1) => raw.solid_mesh().map(|(m, t)| (AnyMesh::Hexes(m), t))?,
-        (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved3(m), t))?,
-        (_, 1) if raw.cell_shapes(2).len() > 1 => raw.mixed_plane_mesh().map(|(m, t)| (AnyMesh::Mixed2(m), t))?,
-        (_, 1) if raw.cell_shape(2) == Some(Shape::Triangle) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Triangles(m), t))?,
-        (_, 1) => raw.plane_mesh().map(|(m, t)| (AnyMesh::Quads(m), t))?,
-        _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Curved2(m), t))?,
+        (3, 1) => raw.linear_solid().map(|(m, t)| (AnyMesh::Solid(m), t))?,
+        (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Solid(m), t))?,
+        (_, 1) => raw.linear_plane().map(|(m, t)| (AnyMesh::Plane(m), t))?,
+        _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Plane(m), t))?,
     };
     Ok(Tagged { mesh, cell_tags, layout: raw.layout(), node_tags: raw.node_tags })
 }
