@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 #[command(
     name = "deformesh",
     version,
-    about = "Curved, boundary-conforming quad and hex meshes by the deformation method",
+    about = "Curved, boundary-conforming meshes of every element kind (triangles, quads, tetrahedra, hexes, prisms, pyramids, mixed) by the deformation method",
     after_help = "Exit codes: 0 success; 1 bad input (the message names the file, line, field or element); \
                   2 the mesh is or would be invalid (the elements are named, nothing is written); \
                   3 a linear solver failed (not the input's fault; nothing is written); \

@@ -1,4 +1,5 @@
-//! Quality figures of linear quad and hex meshes: validity, Jacobian
+//! Quality figures of Algorithm 1's linear meshes of one kind (quads,
+//! triangles, hexes, tetrahedra): validity, Jacobian
 //! determinants, scaled Jacobians, cell sizes and the ratio J/f of
 //! achieved to prescribed Jacobian. The validity certificate itself, for
 //! elements of any order, is [`certify`] (quads and hexes), [`simplex`]

@@ -1,5 +1,8 @@
-//! The meshes: linear quad and hex meshes (`linear`), the mesh of any
-//! order ([`curved`]) and its Lagrange element ([`element`]), plus the
+//! The meshes: the mesh of element blocks of any kinds and order
+//! ([`curved`], [`blocks`]; p = 1 is the linear mesh, and [`mixed`] what
+//! Algorithm 1 asks of it), Algorithm 1's meshes of one kind
+//! (`linear`: quads, triangles, hexes, tetrahedra) and the Lagrange
+//! elements of every kind ([`element`]), plus the
 //! atomic file write ([`file`](mod@file)) that the readers, writers and renderers
 //! share. Everything above the core (io, render, the method) reads its
 //! mesh types from here, so no layer needs another one's types.

@@ -1,5 +1,6 @@
-//! Meshes made of what the reader found: linear quad and hex meshes and
-//! meshes of any order, from one [`Raw`]. Cells are the elements of the
+//! Meshes made of what the reader found: the mesh of element blocks of
+//! any kinds, linear or of any order, and Algorithm 1's meshes of one
+//! kind made from it, from one [`Raw`]. Cells are the elements of the
 //! mesh dimension, boundary elements those one below, both ordered by
 //! element tag; points, and lines of a 3D mesh, carry nothing kept.
 //!

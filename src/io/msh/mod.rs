@@ -1,4 +1,4 @@
-//! Gmsh MSH 4.1 files of quad and hex meshes of any order: one reader for
+//! Gmsh MSH 4.1 files of meshes of every kind and any order: one reader for
 //! ASCII and binary files (`read`), meshes made of what it read
 //! (`build`), and one writer ([`write`]). ASCII MSH 2.2 (and 2.0, 2.1) is
 //! read into the same items and written from a layout
