@@ -627,7 +627,7 @@ impl Case {
             let retag = |edges: &mut Vec<crate::mesh::BoundaryEdge>| edges.iter_mut().for_each(|e| e.part = side_part[e.part]);
             if kind == ElementsSpec::Mixed {
                 let mut mesh = CurvedMesh::checkerboard(lo, hi, m.cells[0], m.cells[1]);
-                mesh.boundary.iter_mut().for_each(|b| b.part = side_part[b.part]);
+                mesh.boundary.parts_mut().iter_mut().for_each(|part| *part = side_part[*part]);
                 mesh.part_names = names;
                 let mesh = CutPlane::new(mesh);
                 check(&mut plane_points(mesh.simplices()))?;
@@ -660,7 +660,7 @@ impl Case {
             Some(shape) => CurvedMesh::brick(lo, hi, n, shape).expect("a solid kind"),
             None => CurvedMesh::hex_prism_box(lo, hi, n),
         };
-        solid.boundary.iter_mut().for_each(|b| b.part = face_part[b.part]);
+        solid.boundary.parts_mut().iter_mut().for_each(|part| *part = face_part[*part]);
         solid.part_names = names;
         if let Some(mesh) = solid.to_solid() {
             check(&mut solid_points(&mesh))?;

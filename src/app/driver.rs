@@ -1252,8 +1252,9 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     }
     // elements of an entity in several groups go into each of them
     for &(k, part) in shared {
-        let nodes = c.mesh.boundary[k].nodes.clone();
-        c.mesh.boundary.push(crate::mesh::CurvedBoundary { nodes, part });
+        let f = c.mesh.boundary.get(k);
+        let (shape, nodes) = (f.shape, f.nodes.to_vec());
+        c.mesh.boundary.push(shape, &nodes, part);
     }
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });

@@ -14,7 +14,7 @@ use crate::mesh::Cells;
 use crate::quality::certify::{Certificate, Certifiers, CertifyOptions};
 use crate::refine::{refine_parts, subdivide, subdivide_mixed, subdivide_mixed_solid, RefineMesh, Settle, SettlePlan, Subdividable, Subdivision, ALG2_BAND};
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, THIN_ASPECT, THIN_TOLERANCE};
-use crate::mesh::{CurvedBoundary, CurvedMesh};
+use crate::mesh::{CurvedMesh, Facet};
 use crate::jacobian::JacobianField;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -862,7 +862,7 @@ where
     quality.snap_first = snap_first;
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
-    let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.clone(), b.part)).collect();
+    let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.to_vec(), b.part)).collect();
     // corners of a boundary element, in cyclic order (by its own kind: a
     // prism's boundary holds triangles and quads)
     let facet_kind = |f: &[usize]| Shape::with_nodes(D - 1, p, f.len()).expect("validated facets");
@@ -1366,7 +1366,7 @@ fn fine_mesh<M, const D: usize>(sub: &Subdivision<M, D>, names: &[String], spaci
         spacing,
         nodes,
         cells: sub.elements.clone(),
-        boundary: sub.facets.iter().map(|(nodes, part)| CurvedBoundary { nodes: nodes.clone(), part: *part }).collect(),
+        boundary: CurvedMesh::<D>::facets_at(sub.p, sub.facets.iter().map(|(nodes, part)| (nodes, *part))),
         part_names: names.to_vec(),
     }
 }
@@ -1527,7 +1527,7 @@ pub fn first_layer_change<const D: usize>(mesh: &CurvedMesh<D>, straight: &[[f64
     // the element's faces, each node with the node across the element
     // per kind of cell, its faces
     let across: HashMap<Shape, Vec<Vec<(usize, usize, bool)>>> = mesh.shapes().into_iter().map(|s| (s, element_faces::<D>(s, p, p))).collect();
-    let facet_corners = |b: &CurvedBoundary| corner_positions(mesh.facet_shape(b), p);
+    let facet_corners = |b: Facet| corner_positions(b.shape, p);
     // every element face by its sorted corner nodes: (element, face)
     let mut faces: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
     for (e, el) in mesh.cells.iter().enumerate() {
@@ -1596,10 +1596,10 @@ pub struct BoundaryError {
 
 /// Per part, the largest of `f(boundary element, shape)` over the boundary
 /// elements of moving (and curved slip) parts; 0 for other parts.
-fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: impl Fn(&CurvedBoundary, &std::sync::Arc<dyn crate::deform::BoundaryShape<D>>) -> f64 + Sync) -> Vec<f64> {
-    mesh
-        .boundary
-        .par_iter()
+fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: impl Fn(Facet, &std::sync::Arc<dyn crate::deform::BoundaryShape<D>>) -> f64 + Sync) -> Vec<f64> {
+    (0..mesh.boundary.len())
+        .into_par_iter()
+        .map(|b| mesh.boundary.get(b))
         .filter_map(|b| match &parts.get(b.part)?.kind {
             PartKind::Move { target, .. } => Some((b.part, f(b, target))),
             _ => None,
@@ -1623,7 +1623,7 @@ fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<
         let of_kind = &weights.iter().find(|w| w.0 == b.nodes.len()).expect("validated facets").1;
         for w in of_kind {
             let mut x = [0.0; D];
-            for (&wi, &node) in w.iter().zip(&b.nodes) {
+            for (&wi, &node) in w.iter().zip(b.nodes) {
                 for d in 0..D {
                     x[d] += wi * mesh.nodes[node][d];
                 }

@@ -353,7 +353,7 @@ pub fn abaqus_string<const D: usize>(mesh: &CurvedMesh<D>) -> Result<String, Aba
             return Err(AbaqusError::UnmatchedBoundary { boundary: b, part: mesh.part_names[be.part].clone() });
         };
         for &(c, k) in list {
-            if key(side_nodes(&cells[c], &sides[k], false)) != key(be.nodes.clone()) {
+            if key(side_nodes(&cells[c], &sides[k], false)) != key(be.nodes.to_vec()) {
                 return Err(AbaqusError::NonConforming { boundary: b, cell: c, side: k + 1 });
             }
             if let Some(first) = names[c][k].replace(b) {
@@ -427,7 +427,7 @@ pub fn abaqus_string<const D: usize>(mesh: &CurvedMesh<D>) -> Result<String, Aba
     for row in &names {
         let line: Vec<&str> = order
             .iter()
-            .map(|&k| row[k].map_or(INTERIOR, |b| mesh.part_names[mesh.boundary[b].part].as_str()))
+            .map(|&k| row[k].map_or(INTERIOR, |b| mesh.part_names[mesh.boundary.parts()[b]].as_str()))
             .collect();
         put!(out, "** {} ", line.join(" "));
     }
@@ -547,15 +547,16 @@ mod tests {
         m.part_names[0] = "has space".into();
         assert!(matches!(abaqus_string(&m), Err(AbaqusError::BadPartName(_))));
         let mut m = CurvedMesh::<2>::structured(1, Spacing::Equispaced, [2, 1], |x| x).unwrap();
-        m.boundary.pop();
+        m.boundary.truncate(m.boundary.len() - 1);
         assert!(matches!(abaqus_string(&m), Err(AbaqusError::UntaggedSide { .. })));
         let mut m = CurvedMesh::<3>::structured(1, Spacing::Equispaced, [1, 1, 1], |x| x).unwrap();
-        let dup = m.boundary[0].clone();
-        m.boundary.push(dup);
+        let dup = m.boundary.get(0);
+        let (shape, nodes, part) = (dup.shape, dup.nodes.to_vec(), dup.part);
+        m.boundary.push(shape, &nodes, part);
         assert!(matches!(abaqus_string(&m), Err(AbaqusError::DuplicateBoundary { .. })));
         let mut m = CurvedMesh::<2>::structured(1, Spacing::Equispaced, [1, 1], |x| x).unwrap();
         m.nodes.push([5.0, 5.0]);
-        m.boundary[0].nodes[1] = 4;
+        m.boundary.nodes_mut(0)[1] = 4;
         assert!(matches!(abaqus_string(&m), Err(AbaqusError::UnmatchedBoundary { .. })));
         let m = CurvedMesh::<2>::structured(1, Spacing::Equispaced, [1, 1], |[x, _]| [x, 0.0]).unwrap();
         assert!(matches!(abaqus_string(&m), Err(AbaqusError::DegenerateCell { .. })));

@@ -192,7 +192,7 @@ impl Layout {
         let (p, nb) = (mesh.p, mesh.boundary.len());
         let facets = mesh.boundary.iter().enumerate().filter(|(_, b)| b.part < k);
         let mut elements: Vec<Element> = facets
-            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: mesh.facet_shape(b), order: p, nodes: b.nodes.clone() })
+            .map(|(e, b)| Element { tag: e as u64 + 1, entity: b.part as i64 + 1, shape: b.shape, order: p, nodes: b.nodes.to_vec() })
             .collect();
         let cells = mesh.cells.iter().enumerate();
         elements.extend(cells.map(|(c, n)| Element { tag: (nb + c) as u64 + 1, entity: 1, shape: mesh.cell_shape(c), order: p, nodes: n.to_vec() }));
@@ -302,7 +302,7 @@ impl Layout {
         };
         let mut part_names: Vec<String> = Vec::new();
         let mut part_of: HashMap<i64, usize> = HashMap::new();
-        let mut boundary = Vec::with_capacity(facets.len());
+        let mut boundary = crate::mesh::Facets::new();
         let mut boundary_attributes = Vec::with_capacity(facets.len());
         for f in &facets {
             let a = attribute(D - 1, f.entity);
@@ -311,7 +311,7 @@ impl Layout {
                 part_names.push(named.map_or_else(|| format!("{}{a}", if D == 2 { "curve" } else { "surface" }), |g| g.name.clone()));
                 part_names.len() - 1
             });
-            boundary.push(crate::mesh::CurvedBoundary { nodes: f.nodes.clone(), part });
+            boundary.push(f.shape, &f.nodes, part);
             boundary_attributes.push(a);
         }
         let mesh = CurvedMesh {
@@ -670,10 +670,10 @@ impl SubElements {
         };
         for b in &mesh.boundary {
             // a 3D boundary of triangles and quads is told apart by node count
-            let shape = mesh.facet_shape(b);
+            let shape = b.shape;
             let mut key: Vec<usize> = corner_indices(shape, mesh.p).iter().map(|&c| b.nodes[c]).collect();
             key.sort_unstable();
-            keep(key, &|| b.nodes.clone(), true);
+            keep(key, &|| b.nodes.to_vec(), true);
         }
         let kinds: Vec<CellKind> = mesh.shapes().into_iter().map(|s| CellKind::new(s, mesh.p, D)).collect();
         let near: std::collections::HashSet<usize> = wanted.iter().flatten().copied().collect();
@@ -828,8 +828,8 @@ pub mod tests {
         let boundary = around
             .windows(2)
             .map(|w| {
-                let nodes = (0..q).map(|k| at(std::array::from_fn(|d| w[0][d] * p + k * w[1][d] - k * w[0][d]))).collect();
-                crate::mesh::CurvedBoundary { nodes, part: 0 }
+                let nodes: Vec<usize> = (0..q).map(|k| at(std::array::from_fn(|d| w[0][d] * p + k * w[1][d] - k * w[0][d]))).collect();
+                (Shape::Line, nodes, 0)
             })
             .collect();
         let cells = crate::mesh::Cells::from_cells(2, p, Shape::Quadrilateral, cells);

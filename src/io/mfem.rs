@@ -468,7 +468,7 @@ mod tests {
         bad.cells[0][2] = bad.cells[0][0];
         assert!(matches!(mfem_string(&bad, &[1, 1], &b), Err(MfemError::RepeatedCorner { cell: 0 })));
         let mut bad = m.clone();
-        bad.boundary[0].nodes[2] = bad.cells[1][8];
+        bad.boundary.nodes_mut(0)[2] = bad.cells[1][8];
         assert!(matches!(mfem_string(&bad, &[1, 1], &b), Err(MfemError::NotASide { index: 0, .. })));
         let mut bad = m;
         bad.p = 5;

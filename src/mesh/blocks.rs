@@ -1,4 +1,5 @@
-//! The cells of a mesh as element blocks: runs of cells of one kind, each
+//! The cells of a mesh, and its boundary elements ([`Facets`]), as element
+//! blocks: runs of cells of one kind, each
 //! block one flat array of node indices (MFEM's and Gmsh's element blocks,
 //! VTK's connectivity). A mesh of any mix of kinds is a list of blocks in
 //! the file's order, so cell `c` is still the file's element `c`, and a
@@ -165,6 +166,136 @@ impl<'a> IntoIterator for &'a Cells {
     }
 }
 
+/// The boundary elements of a mesh (dimension `D − 1`): element blocks
+/// as the cells are ([`Cells`]), each element with its part.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Facets {
+    elements: Cells,
+    parts: Vec<usize>,
+}
+
+/// One boundary element of [`Facets`]: its kind, its nodes (in its
+/// kind's node order; 2D: the domain on the left) and its part.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Facet<'a> {
+    /// The element's kind: a line, triangle or quadrilateral.
+    pub shape: Shape,
+    /// Its nodes.
+    pub nodes: &'a [usize],
+    /// Index into the mesh's part names.
+    pub part: usize,
+}
+
+impl Facets {
+    /// No boundary elements.
+    pub fn new() -> Facets {
+        Facets { elements: Cells::new(), parts: Vec::new() }
+    }
+
+    /// Boundary elements of dimension `dim` at order `p`, each kind told by
+    /// its node count as in [`Cells::from_cells`].
+    pub fn from_nodes<C: AsRef<[usize]>>(dim: usize, p: usize, fallback: Shape, facets: impl IntoIterator<Item = (C, usize)>) -> Facets {
+        facets.into_iter().map(|(f, part)| (Shape::with_nodes(dim, p, f.as_ref().len()).unwrap_or(fallback), f, part)).collect()
+    }
+
+    /// Appends a boundary element of `shape` in `part`.
+    pub fn push(&mut self, shape: Shape, nodes: &[usize], part: usize) {
+        self.elements.push(shape, nodes);
+        self.parts.push(part);
+    }
+
+    /// How many boundary elements there are.
+    pub fn len(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// Whether there is none.
+    pub fn is_empty(&self) -> bool {
+        self.parts.is_empty()
+    }
+
+    /// Boundary element `b`.
+    pub fn get(&self, b: usize) -> Facet<'_> {
+        Facet { shape: self.elements.shape(b), nodes: &self.elements[b], part: self.parts[b] }
+    }
+
+    /// The nodes of boundary element `b`, to edit in place.
+    pub fn nodes_mut(&mut self, b: usize) -> &mut [usize] {
+        &mut self.elements[b]
+    }
+
+    /// Every element's part, in order.
+    pub fn parts(&self) -> &[usize] {
+        &self.parts
+    }
+
+    /// Every element's part, to change in place.
+    pub fn parts_mut(&mut self) -> &mut [usize] {
+        &mut self.parts
+    }
+
+    /// The elements as blocks of one kind (their parts in [`Facets::parts`],
+    /// in the same order).
+    pub fn blocks(&self) -> &[Block] {
+        self.elements.blocks()
+    }
+
+    /// The boundary elements in order.
+    pub fn iter(&self) -> FacetIter<'_> {
+        FacetIter { facets: self, left: 0..self.len() }
+    }
+
+    /// The first `len` elements alone.
+    pub fn truncate(&mut self, len: usize) {
+        *self = self.iter().take(len).map(|f| (f.shape, f.nodes, f.part)).collect();
+    }
+}
+
+/// Boundary elements each with its kind and part ([`Facets::push`] one by
+/// one).
+impl<C: AsRef<[usize]>> FromIterator<(Shape, C, usize)> for Facets {
+    fn from_iter<I: IntoIterator<Item = (Shape, C, usize)>>(facets: I) -> Facets {
+        let mut out = Facets::new();
+        for (shape, f, part) in facets {
+            out.push(shape, f.as_ref(), part);
+        }
+        out
+    }
+}
+
+impl<'a> IntoIterator for &'a Facets {
+    type Item = Facet<'a>;
+    type IntoIter = FacetIter<'a>;
+    fn into_iter(self) -> FacetIter<'a> {
+        self.iter()
+    }
+}
+
+/// The boundary elements in order ([`Facets::iter`]).
+#[derive(Clone)]
+pub struct FacetIter<'a> {
+    facets: &'a Facets,
+    left: std::ops::Range<usize>,
+}
+
+impl<'a> Iterator for FacetIter<'a> {
+    type Item = Facet<'a>;
+    fn next(&mut self) -> Option<Facet<'a>> {
+        self.left.next().map(|b| self.facets.get(b))
+    }
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.left.size_hint()
+    }
+}
+
+impl DoubleEndedIterator for FacetIter<'_> {
+    fn next_back(&mut self) -> Option<Self::Item> {
+        self.left.next_back().map(|b| self.facets.get(b))
+    }
+}
+
+impl ExactSizeIterator for FacetIter<'_> {}
+
 /// The cells' nodes in order ([`Cells::iter`]): each block's chunks.
 pub type Iter<'a> = Exact<std::iter::FlatMap<std::slice::Iter<'a, Block>, std::slice::ChunksExact<'a, usize>, fn(&'a Block) -> std::slice::ChunksExact<'a, usize>>>;
 
@@ -214,6 +345,33 @@ mod tests {
         assert_eq!(cells.iter().len(), 4);
         assert_eq!(cells.iter().rev().next(), Some(&[6, 7, 8, 5][..]));
         assert_eq!(cells.iter().map(<[usize]>::len).collect::<Vec<_>>(), [4, 4, 3, 4]);
+    }
+
+    /// A prism's boundary: triangles and quads in runs, each kind told by
+    /// its node count at order 2 and kept per block; parts travel with
+    /// their elements through iteration (both ways), editing and
+    /// truncation.
+    #[test]
+    fn facets_of_two_kinds_keep_their_parts_and_order() {
+        let (tri, quad) = (Shape::Triangle.num_nodes(2), Shape::Quadrilateral.num_nodes(2));
+        let nodes = |first: usize, n: usize| (first..first + n).collect::<Vec<usize>>();
+        let list = [(nodes(0, tri), 3), (nodes(10, quad), 0), (nodes(20, quad), 1), (nodes(30, tri), 3)];
+        let mut facets = Facets::from_nodes(2, 2, Shape::Quadrilateral, list.iter().map(|(f, part)| (f, *part)));
+        assert_eq!(facets.len(), 4);
+        assert_eq!(facets.blocks().iter().map(|b| (b.shape, b.len())).collect::<Vec<_>>(), [(Shape::Triangle, 1), (Shape::Quadrilateral, 2), (Shape::Triangle, 1)]);
+        let seen: Vec<(Shape, Vec<usize>, usize)> = facets.iter().map(|f| (f.shape, f.nodes.to_vec(), f.part)).collect();
+        let kinds = [Shape::Triangle, Shape::Quadrilateral, Shape::Quadrilateral, Shape::Triangle];
+        assert_eq!(seen, list.iter().zip(kinds).map(|((f, part), k)| (k, f.clone(), *part)).collect::<Vec<_>>());
+        assert_eq!(facets.iter().rev().next().map(|f| f.nodes[0]), Some(30));
+        assert_eq!((&facets).into_iter().len(), 4);
+        facets.parts_mut()[2] = 7;
+        facets.nodes_mut(1)[0] = 99;
+        assert_eq!((facets.get(2).part, facets.get(1).nodes[0], facets.parts()), (7, 99, &[3, 0, 7, 3][..]));
+        facets.truncate(3);
+        assert_eq!((facets.len(), facets.blocks().len(), facets.parts()), (3, 2, &[3, 0, 7][..]));
+        // a count no kind has keeps its width (for `validate` to refuse)
+        let odd = Facets::from_nodes(1, 1, Shape::Line, [(vec![0, 1, 2], 0)]);
+        assert_eq!((odd.get(0).shape, odd.get(0).nodes.len()), (Shape::Line, 3));
     }
 
     proptest::proptest! {

@@ -9,19 +9,8 @@ use super::element::basis::{tensor_map, Basis1d};
 use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, linear_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
 use smallvec::SmallVec;
 use super::element::{prism, pyramid, simplex, Shape};
-use super::blocks::Cells;
+use super::blocks::{Cells, Facets};
 use super::{PlaneMesh, SolidMesh};
-
-/// One boundary element: an order-`p` line (2D meshes) or quad (3D
-/// meshes) with its nodes in tensor order, and its part.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CurvedBoundary {
-    /// `p + 1` (line) or `(p+1)²` (quad) node indices in tensor order. The
-    /// orientation is kept as given (2D convention: domain on the left).
-    pub nodes: Vec<usize>,
-    /// Index into [`CurvedMesh::part_names`].
-    pub part: usize,
-}
 
 /// A mesh of order-`p` Lagrange quads (`D = 2`) or hexes (`D = 3`).
 #[derive(Clone, Debug, PartialEq)]
@@ -40,8 +29,11 @@ pub struct CurvedMesh<const D: usize> {
     /// indices each, in tensor order (quads, hexes) or the lattice order
     /// of their kind ([`super::element::simplex`], [`prism`], [`pyramid`]).
     pub cells: Cells,
-    /// Boundary elements (dimension `D − 1`) with their parts.
-    pub boundary: Vec<CurvedBoundary>,
+    /// Boundary elements (dimension `D − 1`) as element blocks, each
+    /// with its part ([`Facets`]): order-`p` lines, triangles or quads,
+    /// their nodes in the order of their kind (a quad's tensor order), the
+    /// orientation as given (2D: the domain on the left).
+    pub boundary: Facets,
     /// Names of the boundary parts (physical groups of dimension `D − 1`).
     pub part_names: Vec<String>,
 }
@@ -115,7 +107,7 @@ impl<const D: usize> CurvedMesh<D> {
         for c in 0..ncells {
             cells.push(shape, &block(cell_index(c).map(|i| i * p), &all_axes));
         }
-        let mut boundary = Vec::new();
+        let mut boundary = Facets::new();
         for d in 0..D {
             let others: Vec<usize> = (0..D).filter(|&e| e != d).collect();
             for side in 0..2 {
@@ -131,10 +123,7 @@ impl<const D: usize> CurvedMesh<D> {
                     if D == 2 && (d == 0) == (side == 0) {
                         nodes.reverse();
                     }
-                    boundary.push(CurvedBoundary {
-                        nodes,
-                        part: 2 * d + side,
-                    });
+                    boundary.push(if D == 2 { Shape::Line } else { Shape::Quadrilateral }, &nodes, 2 * d + side);
                 }
             }
         }
@@ -167,10 +156,12 @@ impl<const D: usize> CurvedMesh<D> {
         self.cells.shape(c)
     }
 
-    /// The kind of boundary element `b`, told by its node count: a 3D
-    /// boundary of prisms holds triangles and quads.
-    pub fn facet_shape(&self, b: &CurvedBoundary) -> Shape {
-        Shape::with_nodes(D - 1, self.p, b.nodes.len()).unwrap_or(if D == 2 { Shape::Line } else { Shape::Quadrilateral })
+    /// Boundary elements `facets` (nodes and part) of a mesh of order `p`
+    /// as its [`Facets`], each one's kind told by its node count (a 3D
+    /// boundary of prisms holds triangles and quads); a count no kind has
+    /// is kept for `validate` to refuse.
+    pub fn facets_at<C: AsRef<[usize]>>(p: usize, facets: impl IntoIterator<Item = (C, usize)>) -> Facets {
+        Facets::from_nodes(D - 1, p, if D == 2 { Shape::Line } else { Shape::Quadrilateral }, facets)
     }
 
     /// The kinds of cell the mesh holds, in the order of [`Shape`].
@@ -359,7 +350,7 @@ impl CurvedMesh<2> {
     pub fn from_quads<const N: usize>(m: &PlaneMesh<N>) -> Self {
         let (shape, perm) = if N == 3 { (Shape::Triangle, vec![0, 1, 2]) } else { (Shape::Quadrilateral, gmsh_quad_order(1).expect("order 1")) };
         let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&perm, c)).collect();
-        let boundary = m.edges.iter().map(|e| CurvedBoundary { nodes: e.nodes.to_vec(), part: e.part }).collect();
+        let boundary = m.edges.iter().map(|e| (Shape::Line, e.nodes, e.part)).collect();
         let cells = Cells::from_cells(2, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
     }
@@ -371,16 +362,7 @@ impl CurvedMesh<2> {
     /// clockwise as the file gives them), whose kernels are compiled for
     /// that kind: `None` unless p = 1 and every cell is of that kind.
     pub fn to_plane<const N: usize>(&self) -> Option<PlaneMesh<N>> {
-        let kind = if N == 3 { Shape::Triangle } else { Shape::Quadrilateral };
-        if self.p != 1 || N != kind.num_nodes(1) || self.cells.blocks().iter().any(|b| b.shape != kind) || self.boundary.iter().any(|b| b.nodes.len() != 2) {
-            return None;
-        }
-        let cells = (0..self.cells.len())
-            .map(|c| {
-                let v = self.vertices(c);
-                std::array::from_fn(|k| v[k])
-            })
-            .collect();
+        let cells = self.vertices_of_one_kind(if N == 3 { Shape::Triangle } else { Shape::Quadrilateral }, 2)?;
         let edges = self.boundary.iter().map(|b| super::BoundaryEdge { nodes: [b.nodes[0], b.nodes[1]], part: b.part }).collect();
         Some(PlaneMesh { nodes: self.nodes.clone(), cells, edges, part_names: self.part_names.clone() })
     }
@@ -392,8 +374,18 @@ impl CurvedMesh<3> {
     /// tetrahedra (`N = 4`, `K = 3`); `None` unless p = 1 and every cell
     /// and face is of those kinds.
     pub fn to_solid<const N: usize, const K: usize>(&self) -> Option<SolidMesh<N, K>> {
-        let kind = if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron };
-        if self.p != 1 || N != kind.num_nodes(1) || self.cells.blocks().iter().any(|b| b.shape != kind) || self.boundary.iter().any(|b| b.nodes.len() != K) {
+        let cells = self.vertices_of_one_kind(if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron }, K)?;
+        let faces = self.linear_facets().into_iter().map(|(f, part)| super::BoundaryFace { nodes: std::array::from_fn(|k| f[k]), part }).collect();
+        Some(SolidMesh { nodes: self.nodes.clone(), cells, faces, part_names: self.part_names.clone() })
+    }
+}
+
+impl<const D: usize> CurvedMesh<D> {
+    /// Every cell's `N` vertices if the mesh is linear, its cells all of
+    /// `kind` (of `N` vertices) and its boundary elements all of
+    /// `facet_nodes` nodes; else `None`.
+    fn vertices_of_one_kind<const N: usize>(&self, kind: Shape, facet_nodes: usize) -> Option<Vec<[usize; N]>> {
+        if self.p != 1 || N != kind.num_nodes(1) || self.cells.blocks().iter().any(|b| b.shape != kind) || self.boundary.iter().any(|b| b.nodes.len() != facet_nodes) {
             return None;
         }
         let cells = (0..self.cells.len())
@@ -402,8 +394,7 @@ impl CurvedMesh<3> {
                 std::array::from_fn(|k| v[k])
             })
             .collect();
-        let faces = self.linear_facets().into_iter().map(|(f, part)| super::BoundaryFace { nodes: std::array::from_fn(|k| f[k]), part }).collect();
-        Some(SolidMesh { nodes: self.nodes.clone(), cells, faces, part_names: self.part_names.clone() })
+        Some(cells)
     }
 }
 
@@ -415,7 +406,7 @@ impl CurvedMesh<3> {
         let tet = N == 4;
         let (cell, face) = if tet { (vec![0, 1, 2, 3], vec![0, 1, 2]) } else { (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1")) };
         let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&cell, c)).collect();
-        let boundary = m.faces.iter().map(|f| CurvedBoundary { nodes: from_format(&face, &f.nodes), part: f.part }).collect();
+        let boundary = m.faces.iter().map(|f| (if tet { Shape::Triangle } else { Shape::Quadrilateral }, from_format(&face, &f.nodes), f.part)).collect();
         let shape = if tet { Shape::Tetrahedron } else { Shape::Hexahedron };
         let cells = Cells::from_cells(3, 1, shape, cells);
         CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
@@ -438,7 +429,7 @@ impl<const D: usize> CurvedMesh<D> {
     ) -> Self {
         let cells: Cells = cells.into_iter().map(|(shape, v)| (shape, reordered(shape, v.as_ref()))).collect();
         let shape = cells.blocks().first().map_or(if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron }, |b| b.shape);
-        let mut mesh = CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes, cells, boundary: Vec::new(), part_names };
+        let mut mesh = CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes, cells, boundary: Facets::new(), part_names };
         mesh.set_linear_facets(facets);
         mesh
     }
@@ -461,7 +452,7 @@ impl<const D: usize> CurvedMesh<D> {
     /// and part: [`CurvedMesh::linear`]'s input.
     pub fn linear_facets(&self) -> Vec<(Vec<usize>, usize)> {
         debug_assert_eq!(self.p, 1, "the corners of a linear mesh's boundary");
-        self.boundary.iter().map(|b| (reordered(self.facet_shape(b), &b.nodes).to_vec(), b.part)).collect()
+        self.boundary.iter().map(|b| (reordered(b.shape, b.nodes).to_vec(), b.part)).collect()
     }
 
     /// Replaces the boundary elements by `facets` (corners in cyclic order
@@ -472,7 +463,7 @@ impl<const D: usize> CurvedMesh<D> {
             .map(|(f, part)| {
                 let f = f.as_ref();
                 let shape = Shape::with_nodes(D - 1, 1, f.len()).unwrap_or(Shape::Line);
-                CurvedBoundary { nodes: reordered(shape, f).to_vec(), part }
+                (shape, reordered(shape, f), part)
             })
             .collect();
     }
@@ -526,10 +517,10 @@ pub mod tests {
         // bottom edge of cell 0 runs along +x: its nodes are the cell's
         // first row; left edge runs downwards (domain on the left)
         assert_eq!(
-            m.boundary.iter().find(|b| b.part == 2).unwrap().nodes,
+            *m.boundary.iter().find(|b| b.part == 2).unwrap().nodes,
             m.cells[0][..4]
         );
-        let left = &m.boundary.iter().find(|b| b.part == 0).unwrap().nodes;
+        let left = m.boundary.iter().find(|b| b.part == 0).unwrap().nodes;
         assert_eq!(left[0], m.cells[0][12]);
         assert_eq!(left[3], m.cells[0][0]);
         let h = CurvedMesh::<3>::structured(2, Spacing::GaussLobatto, [2, 1, 1], bend3).unwrap();

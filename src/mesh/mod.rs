@@ -14,7 +14,7 @@ pub mod file;
 mod linear;
 pub mod mixed;
 
-pub use blocks::{Block, Cells};
-pub use curved::{CurvedBoundary, CurvedMesh};
+pub use blocks::{Block, Cells, Facet, Facets};
+pub use curved::CurvedMesh;
 pub use linear::*;
 pub use mixed::{cell_faces, corner_jacobians};

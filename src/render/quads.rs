@@ -117,7 +117,7 @@ pub(super) fn plan(
     opts: &RenderOptions,
 ) -> Result<(Frame, QuadCurves), RenderError> {
     validate(mesh, values)?;
-    let boundary = mesh.boundary.iter().map(|b| b.nodes.as_slice());
+    let boundary = mesh.boundary.iter().map(|b| b.nodes);
     check_elements(boundary, &[mesh.p + 1], mesh.nodes.len(), "boundary element")?;
     let curves = QuadCurves::new(mesh);
     let (lo, hi) = opts.bounds.unwrap_or_else(|| bounding_box(&curves.points));

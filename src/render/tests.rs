@@ -102,7 +102,7 @@ fn empty() -> CurvedMesh<2> {
     CurvedMesh {
         nodes: vec![],
         cells: crate::mesh::Cells::new(),
-        boundary: vec![],
+        boundary: crate::mesh::Facets::new(),
         ..box_4x3()
     }
 }
@@ -303,7 +303,10 @@ fn bad_inputs_are_errors_not_panics() {
         RenderError::InvalidCurvedMesh { .. }
     ));
     let mut bad = mesh.clone();
-    bad.boundary[1].nodes.push(0);
+    // a boundary edge with one node too many
+    let mut edges: Vec<(Vec<usize>, usize)> = bad.boundary.iter().map(|b| (b.nodes.to_vec(), b.part)).collect();
+    edges[1].0.push(0);
+    bad.boundary = CurvedMesh::<2>::facets_at(bad.p, edges);
     assert!(matches!(
         err(&bad, &v, &opts),
         RenderError::InvalidCurvedMesh { .. }

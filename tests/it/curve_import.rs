@@ -74,7 +74,7 @@ fn cylinder_boundary_layer_curves_validly_at_p2_and_p3_and_gmsh_agrees() {
         let wall = mesh.part_names.iter().position(|n| n == "wall").unwrap();
         let mut on_wall = 0;
         for b in mesh.boundary.iter().filter(|b| b.part == wall) {
-            for &n in &b.nodes {
+            for &n in b.nodes {
                 let x = mesh.nodes[n];
                 assert!((x[0].hypot(x[1]) - 0.5).abs() < 1e-10, "wall node {n} at radius {}", x[0].hypot(x[1]));
                 on_wall += 1;
@@ -254,7 +254,7 @@ fn an_entity_in_two_groups_belongs_to_both() {
     assert!(r.unbound_groups.contains(&"ring".to_string()), "{:?}", r.unbound_groups);
     let mesh = CurvedMesh::<2>::read_msh(&dir.path().join("curved2.msh")).unwrap();
     let group = |name: &str| mesh.part_names.iter().position(|n| n == name).unwrap();
-    let of = |part: usize| mesh.boundary.iter().filter(|b| b.part == part).map(|b| b.nodes.clone()).collect::<Vec<_>>();
+    let of = |part: usize| mesh.boundary.iter().filter(|b| b.part == part).map(|b| b.nodes.to_vec()).collect::<Vec<_>>();
     assert_eq!(of(group("wall")).len(), 12);
     assert_eq!(of(group("wall")), of(group("ring")));
     for b in of(group("wall")) {
@@ -491,7 +491,7 @@ fn a_hex_boundary_layer_around_a_sphere_stays_valid_at_p2_and_p3() {
         assert_eq!(r.unbound_groups, vec!["box".to_string()]);
         let mesh = CurvedMesh::<3>::read_msh(&j.output).unwrap();
         let sphere = mesh.part_names.iter().position(|n| n == "sphere").unwrap();
-        let off = mesh.boundary.iter().filter(|b| b.part == sphere).flat_map(|b| &b.nodes).map(|&n| (deformesh::numeric::norm(mesh.nodes[n]) - 0.5).abs()).fold(0.0, f64::max);
+        let off = mesh.boundary.iter().filter(|b| b.part == sphere).flat_map(|b| b.nodes).map(|&n| (deformesh::numeric::norm(mesh.nodes[n]) - 0.5).abs()).fold(0.0, f64::max);
         assert!(off < 1e-10, "a sphere node {off:e} off the sphere");
         let layer = r.quality.first_layer_change["sphere"];
         assert!(layer.vertices < 0.01, "the first layer's height changes by {:.2}% at a vertex", 100.0 * layer.vertices);

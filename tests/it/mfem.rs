@@ -116,8 +116,8 @@ fn scramble<const D: usize>(m: &CurvedMesh<D>, seed: u64) -> CurvedMesh<D> {
         .iter()
         .map(|&c| rotate(&m.cells[c], &rots[rand_below(&mut s, rots.len())], m.p).iter().map(|&v| new[v]).collect::<Vec<usize>>());
     out.cells = deformesh::mesh::Cells::from_cells(D, m.p, m.shape, cells);
-    for b in &mut out.boundary {
-        b.nodes.iter_mut().for_each(|v| *v = new[*v]);
+    for b in 0..out.boundary.len() {
+        out.boundary.nodes_mut(b).iter_mut().for_each(|v| *v = new[*v]);
     }
     out
 }

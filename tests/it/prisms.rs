@@ -46,7 +46,7 @@ fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, Pat
 pub(crate) fn group_off<const D: usize>(file: &Path, group: &str, distance: impl Fn([f64; D]) -> f64) -> (f64, usize) {
     let mesh = CurvedMesh::<D>::read_msh(file).unwrap();
     let part = mesh.part_names.iter().position(|n| n == group).unwrap();
-    let nodes: Vec<usize> = mesh.boundary.iter().filter(|b| b.part == part).flat_map(|b| b.nodes.clone()).collect();
+    let nodes: Vec<usize> = mesh.boundary.iter().filter(|b| b.part == part).flat_map(|b| b.nodes.to_vec()).collect();
     (nodes.iter().map(|&n| distance(mesh.nodes[n])).fold(0.0, f64::max), nodes.len())
 }
 

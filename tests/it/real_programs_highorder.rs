@@ -97,7 +97,7 @@ fn curved_prisms(p: usize, seed: u64) -> CurvedMesh<3> {
             })
         });
     let cells = deformesh::mesh::Cells::from_cells(3, p, Shape::Prism, cells);
-    let mut m = CurvedMesh { shape: Shape::Prism, cells, boundary: vec![], part_names: vec![], ..hexes };
+    let mut m = CurvedMesh { shape: Shape::Prism, cells, boundary: deformesh::mesh::Facets::new(), part_names: vec![], ..hexes };
     let mut s = seed;
     for x in &mut m.nodes {
         for c in x.iter_mut() {

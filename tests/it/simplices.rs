@@ -79,7 +79,7 @@ fn group_nodes_on<const D: usize>(file: &Path, group: &str, distance: impl Fn([f
     let part = mesh.part_names.iter().position(|n| n == group).unwrap();
     let mut checked = 0;
     for b in mesh.boundary.iter().filter(|b| b.part == part) {
-        for &n in &b.nodes {
+        for &n in b.nodes {
             assert!(distance(mesh.nodes[n]) < tol, "node {n} of `{group}` {:e} off", distance(mesh.nodes[n]));
             checked += 1;
         }

@@ -16,7 +16,7 @@ use super::types::gmsh_perm;
 use super::{syntax, MshError, CURVED, LINEAR};
 use crate::io::layout::{self, Entity, Layout, Periodic, PhysicalName};
 use crate::mesh::element::{from_format, Shape, Spacing};
-use crate::mesh::{CurvedBoundary, CurvedMesh, PlaneMesh, SolidMesh};
+use crate::mesh::{CurvedMesh, PlaneMesh, SolidMesh};
 
 /// An element: its tag, its block and its nodes (Gmsh's local order).
 type Element<'a> = (u64, &'a Block, &'a [usize]);
@@ -232,7 +232,7 @@ impl Raw {
             spacing: Spacing::Equispaced,
             nodes: self.nodes.iter().map(|x| std::array::from_fn(|d| x[d])).collect(),
             cells: cells.iter().map(|c| (c.1.kind.shape, from_format(&perms[&c.1.kind.shape], c.2))).collect(),
-            boundary: faces.iter().map(|&(nodes, part, b)| CurvedBoundary { nodes: from_format(&perms[&b.kind.shape], nodes), part }).collect(),
+            boundary: faces.iter().map(|&(nodes, part, b)| (b.kind.shape, from_format(&perms[&b.kind.shape], nodes), part)).collect(),
             part_names,
         };
         Ok((mesh, cells.iter().map(|c| c.0).collect()))

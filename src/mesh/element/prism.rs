@@ -390,7 +390,7 @@ pub mod tests {
             }
         }
         let cells = crate::mesh::Cells::from_cells(3, p, Shape::Prism, cells);
-        CurvedMesh { shape: Shape::Prism, p, spacing, nodes, cells, boundary: vec![], part_names: vec![] }
+        CurvedMesh { shape: Shape::Prism, p, spacing, nodes, cells, boundary: crate::mesh::Facets::new(), part_names: vec![] }
     }
 
     /// The box is a valid mesh of shared nodes, its prisms affine with

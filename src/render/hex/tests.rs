@@ -625,7 +625,7 @@ fn bad_inputs_are_errors_not_panics() {
     let empty = CurvedMesh {
         nodes: vec![],
         cells: Cells::new(),
-        boundary: vec![],
+        boundary: crate::mesh::Facets::new(),
         ..brick([1, 1, 1])
     };
     assert!(matches!(
@@ -671,7 +671,7 @@ fn edge_cases_still_render() {
     let empty = CurvedMesh {
         nodes: vec![],
         cells: Cells::new(),
-        boundary: vec![],
+        boundary: crate::mesh::Facets::new(),
         ..brick([1, 1, 1])
     };
     let boxed = RenderOptions3 {
@@ -918,7 +918,7 @@ fn tet_box(
         spacing,
         nodes,
         cells: Cells::from_cells(3, p, Shape::Tetrahedron, cells),
-        boundary: vec![],
+        boundary: crate::mesh::Facets::new(),
         part_names: vec![],
     }
 }
@@ -1484,7 +1484,7 @@ fn hex_pyramid_tets(p: usize) -> CurvedMesh<3> {
         return coarse;
     }
     let (s, _) = crate::refine::subdivide_mixed_solid(&coarse, p, Spacing::Equispaced).unwrap();
-    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: s.elements.clone(), boundary: vec![], part_names: vec![] }
+    CurvedMesh { shape: Shape::Hexahedron, p, spacing: Spacing::Equispaced, nodes: s.fine.nodes.clone(), cells: s.elements.clone(), boundary: crate::mesh::Facets::new(), part_names: vec![] }
 }
 
 /// A mesh of hexes, a pyramid and tets is drawn cell by cell: its surface
