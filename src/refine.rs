@@ -410,12 +410,12 @@ pub fn subdivide_mixed(coarse: &CurvedMesh<2>, p: usize, spacing: Spacing) -> Re
                 }
                 elements.push(Shape::Quadrilateral, &el);
             }
-            ref tri => {
-                let tri = [tri[0], tri[1], tri[2]];
-                let el = simplex_element::<2, 3>(c, &tri, &coarse.nodes, (&lattice, &space.nodes, p), &mut ids, &mut nodes);
+            [a, b, d] => {
+                let el = simplex_element::<2, 3>(c, &[a, b, d], &coarse.nodes, (&lattice, &space.nodes, p), &mut ids, &mut nodes);
                 sub_cells.extend(subs.iter().map(|s| std::array::from_fn(|a| el[s[a]])));
                 elements.push(Shape::Triangle, &el);
             }
+            ref v => unreachable!("a plane cell of {} vertices", v.len()),
         }
         owner.resize(owner.len() + sub_cells.len() - before, c);
     }
@@ -481,11 +481,12 @@ pub fn subdivide_mixed_solid(coarse: &CurvedMesh<3>, p: usize, spacing: Spacing)
                 sub_cells.extend(pyramid_sub_tets.iter().map(|s| s.map(|a| el[a])));
                 elements.push(Shape::Pyramid, &el);
             }
-            _ => {
+            Shape::Hexahedron => {
                 let el = tensor_element::<3, 8>(c, &std::array::from_fn(|k| v[k]), &coarse.nodes, &t, &mut ids, &mut nodes);
                 sub_hexes.extend(tensor_sub_cells::<3, 8>(&el, p).map(|h| (c, h)));
                 elements.push(Shape::Hexahedron, &el);
             }
+            other => unreachable!("{other:?} is not a solid cell"),
         }
         owner.resize(owner.len() + sub_cells.len() - before, c);
     }

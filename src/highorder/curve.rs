@@ -122,6 +122,9 @@ pub enum CurveError {
     /// The coarse mesh is invalid: no high-order mesh is made from it.
     #[error("the mesh to be curved already has {} invalid cell(s): {:?}", .0.len(), &.0[..(.0.len().min(20))])]
     InvalidCoarse(Vec<usize>),
+    /// The mesh of several kinds to be curved is not linear.
+    #[error("the mesh to be curved is of order {0}: curving starts from a linear mesh (order 1)")]
+    NotLinear(usize),
     /// The mesh's boundary elements do not fit its cells.
     #[error(transparent)]
     Subdivide(#[from] crate::refine::SubdivideError),
@@ -196,7 +199,7 @@ fn off_shape_message(o: &OffShape) -> String {
 fn worst_off_shape<const D: usize>(
     nodes: &[[f64; D]],
     facets: &[(Vec<usize>, usize)],
-    corners: impl Fn(&[usize]) -> Vec<usize>,
+    corners: impl Fn(usize) -> Vec<usize>,
     parts: &[BoundaryPart<D>],
     names: &[String],
     tol: f64,
@@ -205,11 +208,11 @@ fn worst_off_shape<const D: usize>(
     let len = |a: usize, b: usize| (0..D).map(|k| (nodes[a][k] - nodes[b][k]).powi(2)).sum::<f64>().sqrt();
     // per (part, node): the shortest edge of the part's facets at it
     let mut edge: HashMap<(usize, usize), f64> = HashMap::new();
-    for (f, part) in facets {
+    for (k, (f, part)) in facets.iter().enumerate() {
         if !matches!(parts.get(*part).map(|p| &p.kind), Some(PartKind::Move { .. })) {
             continue;
         }
-        let c = corners(f);
+        let c = corners(k);
         let shortest = (0..c.len()).map(|i| len(c[i], c[(i + 1) % c.len()])).fold(f64::INFINITY, f64::min);
         for &n in f {
             let e = edge.entry((*part, n)).or_insert(f64::INFINITY);
@@ -768,6 +771,9 @@ where
 /// [`subdivide_mixed`]. Cells that tangle are named by the coarse cell.
 pub fn curve_mixed(coarse: &CurvedMesh<2>, parts: &[BoundaryPart<2>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<2>, CurveError> {
     check_order(opts.order)?;
+    if coarse.p != 1 {
+        return Err(CurveError::NotLinear(coarse.p));
+    }
     let bad = crate::quality::certify::invalid_mixed_cells(coarse);
     if !bad.is_empty() {
         return Err(CurveError::InvalidCoarse(bad));
@@ -775,7 +781,7 @@ pub fn curve_mixed(coarse: &CurvedMesh<2>, parts: &[BoundaryPart<2>], opts: &Cur
     let parts = on_shape_parts(&coarse.nodes, &coarse.linear_facets(), &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed(coarse, opts.order, opts.spacing)?;
-    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells.to_vecs()), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
+    curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells.iter().collect::<Vec<_>>()), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))
 }
 
 /// [`curve_with_progress`] on a solid of tetrahedra and prisms: the
@@ -784,6 +790,9 @@ pub fn curve_mixed(coarse: &CurvedMesh<2>, parts: &[BoundaryPart<2>], opts: &Cur
 /// cell.
 pub fn curve_mixed_solid(coarse: &CurvedMesh<3>, parts: &[BoundaryPart<3>], opts: &CurveOptions, progress: impl FnMut(f64, &RunStats)) -> Result<Curved<3>, CurveError> {
     check_order(opts.order)?;
+    if coarse.p != 1 {
+        return Err(CurveError::NotLinear(coarse.p));
+    }
     let bad = coarse.invalid_cells();
     if !bad.is_empty() {
         return Err(CurveError::InvalidCoarse(bad));
@@ -791,7 +800,7 @@ pub fn curve_mixed_solid(coarse: &CurvedMesh<3>, parts: &[BoundaryPart<3>], opts
     let parts = on_shape_parts(&coarse.nodes, &coarse.linear_facets(), &coarse.part_names, parts, opts)?;
     let clock = Instant::now();
     let (sub, owner) = subdivide_mixed_solid(coarse, opts.order, opts.spacing)?;
-    let mut curved = curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells.to_vecs()), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))?;
+    let mut curved = curve_subdivided(&sub, (&coarse.part_names, largest_aspect(&coarse.nodes, &coarse.cells.iter().collect::<Vec<_>>()), clock), parts, opts, progress).map_err(|e| by_owner(e, &owner))?;
     // the hexes' sub-cell centres, after every element node, were
     // Algorithm 2's alone
     let element_nodes = sub.elements.iter().flatten().max().map_or(0, |&n| n + 1);
@@ -817,7 +826,7 @@ fn by_owner(e: CurveError, owner: &[usize]) -> CurveError {
 /// corners, in cyclic order) lies on its shape.
 fn on_shape_parts<const D: usize>(nodes: &[[f64; D]], facets: &[(Vec<usize>, usize)], names: &[String], parts: &[BoundaryPart<D>], opts: &CurveOptions) -> Result<Vec<BoundaryPart<D>>, CurveError> {
     let parts = refine_parts(parts);
-    match worst_off_shape(nodes, facets, |f| f.to_vec(), &parts, names, opts.shape_tolerance) {
+    match worst_off_shape(nodes, facets, |k| facets[k].0.clone(), &parts, names, opts.shape_tolerance) {
         Some(o) => Err(CurveError::OffShape(Box::new(o))),
         None => Ok(parts),
     }
@@ -865,8 +874,10 @@ where
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.to_vec(), b.part)).collect();
     // corners of a boundary element, in cyclic order (by its own kind: a
     // prism's boundary holds triangles and quads)
-    let facet_kind = |f: &[usize]| Shape::with_nodes(D - 1, p, f.len()).expect("validated facets");
-    let corners = |f: &[usize]| corner_positions(facet_kind(f), p).iter().map(|&c| f[c]).collect();
+    let corners = |k: usize| {
+        let b = mesh.boundary.get(k);
+        corner_positions(b.shape, p).iter().map(|&c| b.nodes[c]).collect()
+    };
     if let Some(mut o) = worst_off_shape(&mesh.nodes, &fine_facets, corners, &parts2, &mesh.part_names, opts.shape_tolerance) {
         o.after = true;
         return Err(CurveError::OffShape(Box::new(o)));
@@ -1617,10 +1628,10 @@ fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<
     let m = samples.max(2);
     // per kind of boundary element (a prism's boundary holds two)
     let kinds: Vec<Shape> = mesh.shapes().iter().flat_map(|s| s.facets().iter().map(|f| f.0)).collect();
-    let weights: Vec<(usize, Vec<Vec<f64>>)> = kinds.into_iter().map(|k| Ok((k.num_nodes(mesh.p), facet_sample_weights(k, mesh.p, mesh.spacing, m)?))).collect::<Result<_, HighOrderError>>()?;
+    let weights: Vec<(Shape, Vec<Vec<f64>>)> = kinds.into_iter().map(|k| Ok((k, facet_sample_weights(k, mesh.p, mesh.spacing, m)?))).collect::<Result<_, HighOrderError>>()?;
     Ok(per_part(mesh, parts, |b, target| {
         let mut worst = 0.0f64;
-        let of_kind = &weights.iter().find(|w| w.0 == b.nodes.len()).expect("validated facets").1;
+        let of_kind = &weights.iter().find(|w| w.0 == b.shape).expect("validated facets").1;
         for w in of_kind {
             let mut x = [0.0; D];
             for (&wi, &node) in w.iter().zip(b.nodes) {
@@ -1692,6 +1703,18 @@ mod tests {
     /// Over quads and triangles alike: a ½ × 1 quad has corners ½ apart
     /// and 1.118 on its diagonal; the triangle (½,0), (1,0), (½,1) has the
     /// same shortest and longest sides; a unit square's ratio is √2.
+    /// Curving starts from a linear mesh: a mesh of several kinds of
+    /// order 2 or 3 is refused with its order (its cells' first nodes are
+    /// no vertices to cut or check).
+    #[test]
+    fn meshes_of_several_kinds_are_curved_from_order_one_only() {
+        let opts = CurveOptions::default();
+        let plane = CurvedMesh::<2>::structured(2, Spacing::Equispaced, [1, 1], |x| x).unwrap();
+        assert!(matches!(curve_mixed(&plane, &[], &opts, |_, _| {}), Err(CurveError::NotLinear(2))));
+        let solid = CurvedMesh::<3>::structured(3, Spacing::Equispaced, [1, 1, 1], |x| x).unwrap();
+        assert!(matches!(curve_mixed_solid(&solid, &[], &opts, |_, _| {}), Err(CurveError::NotLinear(3))));
+    }
+
     #[test]
     fn largest_aspect_takes_cells_of_any_kind() {
         let nodes = [[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 1.0]];

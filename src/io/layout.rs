@@ -669,7 +669,7 @@ impl SubElements {
             }
         };
         for b in &mesh.boundary {
-            // a 3D boundary of triangles and quads is told apart by node count
+            // a 3D boundary of triangles and quads: each by its own kind
             let shape = b.shape;
             let mut key: Vec<usize> = corner_indices(shape, mesh.p).iter().map(|&c| b.nodes[c]).collect();
             key.sort_unstable();

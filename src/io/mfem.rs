@@ -263,7 +263,7 @@ impl Topology {
             }
         }
         for (index, b) in mesh.boundary.iter().enumerate() {
-            let corners = corner_nodes(D - 1, &b.nodes, mesh.p);
+            let corners = corner_nodes(D - 1, b.nodes, mesh.p);
             let key = sorted(corners.iter().map(|&v| self.vertex[v]));
             if key.contains(&usize::MAX) || !known.contains(&key) {
                 return Err(MfemError::NotASide { index, corners });
@@ -296,7 +296,7 @@ fn push_boundary<const D: usize>(out: &mut String, mesh: &CurvedMesh<D>, topo: &
     let geom = if D == 2 { SEGMENT } else { SQUARE };
     let _ = writeln!(out, "boundary\n{}", mesh.boundary.len());
     for (b, a) in mesh.boundary.iter().zip(attrs) {
-        let v: Vec<usize> = corner_nodes(D - 1, &b.nodes, mesh.p).iter().map(|&n| topo.vertex[n]).collect();
+        let v: Vec<usize> = corner_nodes(D - 1, b.nodes, mesh.p).iter().map(|&n| topo.vertex[n]).collect();
         push_element(out, *a, geom, &v);
     }
     out.push('\n');

@@ -41,7 +41,7 @@ impl Block {
 }
 
 /// The cells of a mesh: element blocks in order, indexed as one list.
-#[derive(Clone, Debug, PartialEq, Default)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Cells {
     blocks: Vec<Block>,
     /// The index of each block's first cell, and the total after the last.
@@ -129,6 +129,20 @@ impl Cells {
     }
 }
 
+/// No cells ([`Cells::new`]: the running total starts at 0).
+impl Default for Cells {
+    fn default() -> Cells {
+        Cells::new()
+    }
+}
+
+/// No boundary elements.
+impl Default for Facets {
+    fn default() -> Facets {
+        Facets::new()
+    }
+}
+
 impl Index<usize> for Cells {
     type Output = [usize];
     fn index(&self, c: usize) -> &[usize] {
@@ -168,7 +182,7 @@ impl<'a> IntoIterator for &'a Cells {
 
 /// The boundary elements of a mesh (dimension `D − 1`): element blocks
 /// as the cells are ([`Cells`]), each element with its part.
-#[derive(Clone, Debug, PartialEq, Default)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Facets {
     elements: Cells,
     parts: Vec<usize>,
@@ -242,13 +256,10 @@ impl Facets {
 
     /// The boundary elements in order.
     pub fn iter(&self) -> FacetIter<'_> {
-        FacetIter { facets: self, left: 0..self.len() }
+        let kinded: fn(&Block) -> KindedChunks<'_> = |b| std::iter::repeat(b.shape).zip(b.cells());
+        FacetIter { elements: self.elements.blocks().iter().flat_map(kinded), parts: self.parts.iter() }
     }
 
-    /// The first `len` elements alone.
-    pub fn truncate(&mut self, len: usize) {
-        *self = self.iter().take(len).map(|f| (f.shape, f.nodes, f.part)).collect();
-    }
 }
 
 /// Boundary elements each with its kind and part ([`Facets::push`] one by
@@ -271,26 +282,25 @@ impl<'a> IntoIterator for &'a Facets {
     }
 }
 
-/// The boundary elements in order ([`Facets::iter`]).
+/// The boundary elements in order ([`Facets::iter`]): the blocks' chunks
+/// with their kinds, beside the parts.
 #[derive(Clone)]
 pub struct FacetIter<'a> {
-    facets: &'a Facets,
-    left: std::ops::Range<usize>,
+    elements: std::iter::FlatMap<std::slice::Iter<'a, Block>, KindedChunks<'a>, fn(&'a Block) -> KindedChunks<'a>>,
+    parts: std::slice::Iter<'a, usize>,
 }
+
+/// A block's elements, each with the block's kind.
+type KindedChunks<'a> = std::iter::Zip<std::iter::Repeat<Shape>, std::slice::ChunksExact<'a, usize>>;
 
 impl<'a> Iterator for FacetIter<'a> {
     type Item = Facet<'a>;
     fn next(&mut self) -> Option<Facet<'a>> {
-        self.left.next().map(|b| self.facets.get(b))
+        let (shape, nodes) = self.elements.next()?;
+        Some(Facet { shape, nodes, part: *self.parts.next()? })
     }
     fn size_hint(&self) -> (usize, Option<usize>) {
-        self.left.size_hint()
-    }
-}
-
-impl DoubleEndedIterator for FacetIter<'_> {
-    fn next_back(&mut self) -> Option<Self::Item> {
-        self.left.next_back().map(|b| self.facets.get(b))
+        self.parts.size_hint()
     }
 }
 
@@ -349,8 +359,8 @@ mod tests {
 
     /// A prism's boundary: triangles and quads in runs, each kind told by
     /// its node count at order 2 and kept per block; parts travel with
-    /// their elements through iteration (both ways), editing and
-    /// truncation.
+    /// their elements through iteration and editing, and iteration gives
+    /// what indexing does.
     #[test]
     fn facets_of_two_kinds_keep_their_parts_and_order() {
         let (tri, quad) = (Shape::Triangle.num_nodes(2), Shape::Quadrilateral.num_nodes(2));
@@ -362,13 +372,18 @@ mod tests {
         let seen: Vec<(Shape, Vec<usize>, usize)> = facets.iter().map(|f| (f.shape, f.nodes.to_vec(), f.part)).collect();
         let kinds = [Shape::Triangle, Shape::Quadrilateral, Shape::Quadrilateral, Shape::Triangle];
         assert_eq!(seen, list.iter().zip(kinds).map(|((f, part), k)| (k, f.clone(), *part)).collect::<Vec<_>>());
-        assert_eq!(facets.iter().rev().next().map(|f| f.nodes[0]), Some(30));
+        assert_eq!(facets.iter().last().map(|f| f.nodes[0]), Some(30));
         assert_eq!((&facets).into_iter().len(), 4);
         facets.parts_mut()[2] = 7;
         facets.nodes_mut(1)[0] = 99;
         assert_eq!((facets.get(2).part, facets.get(1).nodes[0], facets.parts()), (7, 99, &[3, 0, 7, 3][..]));
-        facets.truncate(3);
-        assert_eq!((facets.len(), facets.blocks().len(), facets.parts()), (3, 2, &[3, 0, 7][..]));
+        assert!(facets.iter().enumerate().all(|(b, f)| f == facets.get(b)));
+        // a facet whose kind and node count disagree is refused
+        let mut mesh = crate::mesh::CurvedMesh::brick([0.0; 3], [1.0; 3], [1, 1, 1], Shape::Prism).unwrap();
+        assert!(mesh.validate().is_ok());
+        mesh.boundary.push(Shape::Quadrilateral, &[0, 1, 2], 0);
+        let why = mesh.validate().unwrap_err();
+        assert!(why.starts_with(&format!("boundary face {} needs 3 or 4 nodes", mesh.boundary.len() - 1)), "{why}");
         // a count no kind has keeps its width (for `validate` to refuse)
         let odd = Facets::from_nodes(1, 1, Shape::Line, [(vec![0, 1, 2], 0)]);
         assert_eq!((odd.get(0).shape, odd.get(0).nodes.len()), (Shape::Line, 3));

@@ -237,7 +237,8 @@ impl<const D: usize> CurvedMesh<D> {
         let per_face = counts.iter().map(usize::to_string).collect::<Vec<_>>().join(" or ");
         let word = if D == 2 { "boundary edge" } else { "boundary face" };
         for (e, b) in self.boundary.iter().enumerate() {
-            if !counts.contains(&b.nodes.len()) || b.nodes.iter().any(|&v| v >= n) {
+            // (the count its own kind has, and a face kind of the cells')
+            if b.nodes.len() != b.shape.num_nodes(self.p) || !counts.contains(&b.nodes.len()) || b.nodes.iter().any(|&v| v >= n) {
                 return Err(format!(
                     "{word} {e} needs {per_face} nodes < {n}, has {:?}",
                     b.nodes
@@ -358,9 +359,10 @@ impl CurvedMesh<2> {
 
 impl CurvedMesh<2> {
     /// The linear mesh as Algorithm 1's mesh of one kind, `N` vertices
-    /// per cell (quads 4, triangles 3; each cell's vertices counter-
-    /// clockwise as the file gives them), whose kernels are compiled for
-    /// that kind: `None` unless p = 1 and every cell is of that kind.
+    /// per cell (quads 4, triangles 3; each cell's vertices in its cyclic
+    /// order as given: `curve` turns clockwise ones), whose kernels are
+    /// compiled for that kind: `None` unless p = 1 and every cell is of
+    /// that kind.
     pub fn to_plane<const N: usize>(&self) -> Option<PlaneMesh<N>> {
         let cells = self.vertices_of_one_kind(if N == 3 { Shape::Triangle } else { Shape::Quadrilateral }, 2)?;
         let edges = self.boundary.iter().map(|b| super::BoundaryEdge { nodes: [b.nodes[0], b.nodes[1]], part: b.part }).collect();
@@ -375,7 +377,14 @@ impl CurvedMesh<3> {
     /// and face is of those kinds.
     pub fn to_solid<const N: usize, const K: usize>(&self) -> Option<SolidMesh<N, K>> {
         let cells = self.vertices_of_one_kind(if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron }, K)?;
-        let faces = self.linear_facets().into_iter().map(|(f, part)| super::BoundaryFace { nodes: std::array::from_fn(|k| f[k]), part }).collect();
+        let faces = self
+            .boundary
+            .iter()
+            .map(|b| {
+                let f = reordered(b.shape, b.nodes);
+                super::BoundaryFace { nodes: std::array::from_fn(|k| f[k]), part: b.part }
+            })
+            .collect();
         Some(SolidMesh { nodes: self.nodes.clone(), cells, faces, part_names: self.part_names.clone() })
     }
 }
@@ -462,7 +471,7 @@ impl<const D: usize> CurvedMesh<D> {
             .into_iter()
             .map(|(f, part)| {
                 let f = f.as_ref();
-                let shape = Shape::with_nodes(D - 1, 1, f.len()).unwrap_or(Shape::Line);
+                let shape = Shape::with_nodes(D - 1, 1, f.len()).unwrap_or(if D == 2 { Shape::Line } else { Shape::Quadrilateral });
                 (shape, reordered(shape, f), part)
             })
             .collect();

@@ -293,10 +293,11 @@ impl CurvedMesh<3> {
                 Shape::Tetrahedron => cells.push([v[0], v[1], v[2], v[3]]),
                 Shape::Prism => cells.extend(prism_tets(std::array::from_fn(|k| v[k]))),
                 Shape::Pyramid => cells.extend(pyramid_tets(std::array::from_fn(|k| v[k]))),
-                _ => {
+                Shape::Hexahedron => {
                     nodes.push(mean_of(&v, &nodes));
                     cells.extend(hex_tets(std::array::from_fn(|k| v[k]), nodes.len() - 1));
                 }
+                other => unreachable!("{other:?} is not a solid cell"),
             }
             owner.resize(cells.len(), c);
         }

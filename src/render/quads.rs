@@ -220,7 +220,7 @@ impl QuadCurves {
             }
         }
         for b in &mesh.boundary {
-            let (e, _) = intern(&mut curves, &mut uses, &b.nodes);
+            let (e, _) = intern(&mut curves, &mut uses, b.nodes);
             curves.boundary[e] = true;
         }
         for (flag, &n) in curves.boundary.iter_mut().zip(&uses) {

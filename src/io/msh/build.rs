@@ -143,7 +143,7 @@ impl Raw {
                 let why = if b.kind.dim == dim && dim == 2 {
                     "this reads one kind of cell (Algorithm 1's `run` deforms meshes of one kind); `curve` takes quads and triangles together"
                 } else if b.kind.dim == dim {
-                    "solids of one kind of cell are curved for now (mixed solid meshes are next); mesh all of the solid with one kind"
+                    "a solid of hexes or of tetrahedra alone holds no other kind of cell (an empty element block of another kind counts: remove it)"
                 } else {
                     "the boundary elements must be faces of the cells"
                 };

@@ -197,7 +197,7 @@ pub enum MshError {
         tag: u64,
     },
     /// A node of a 2D mesh off the plane z = 0: dropping z would move it.
-    #[error("{at}: node {tag} has z = {z}, but a quad (2D) mesh must lie in the plane z = 0 (move or project the mesh there)")]
+    #[error("{at}: node {tag} has z = {z}, but a plane (2D) mesh must lie in the plane z = 0 (move or project the mesh there)")]
     OffPlane {
         /// Where its coordinates are.
         at: Pos,
@@ -206,9 +206,9 @@ pub enum MshError {
         /// Its z.
         z: f64,
     },
-    /// Cells of two kinds in one mesh (quads with triangles, hexes with
-    /// tetrahedra), or boundary elements of another kind than the cells'
-    /// facets: the method takes one kind of cell per mesh for now.
+    /// An element block of a kind the mesh cannot hold there: cells of
+    /// another kind than a reader of one kind takes, or boundary elements
+    /// that are no faces of the cells.
     #[error("{at}: element block of {found:?}s in a mesh whose {what} are {expected:?}s: {why}")]
     MixedShapes {
         /// Where the block header is.
