@@ -6,7 +6,7 @@
 //! which is how the file writers take meshes of any order.
 
 use super::element::basis::{tensor_map, Basis1d};
-use super::element::{check_order, from_format, gmsh_hex_order, gmsh_quad_order, linear_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
+use super::element::{check_order, linear_order, nodes_1d, HighOrderError, Spacing, MAX_ORDER};
 use smallvec::SmallVec;
 use super::element::{prism, pyramid, simplex, Shape};
 use super::blocks::{Cells, Facets};
@@ -39,6 +39,11 @@ pub struct CurvedMesh<const D: usize> {
 }
 
 impl<const D: usize> CurvedMesh<D> {
+    /// The tensor kind of the dimension, quadrilateral or hexahedron: an
+    /// empty mesh's kind, and with its facet kind the fallback where a
+    /// node count tells no kind.
+    const TENSOR: Shape = if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron };
+
     /// A structured mesh of `n[0] × … × n[D−1]` order-`p` cells of the unit
     /// box `[0,1]^D`, its nodes then moved by `map`. Nodes are numbered
     /// first axis fastest on the global grid of `n_d p + 1` nodes per axis,
@@ -102,7 +107,7 @@ impl<const D: usize> CurvedMesh<D> {
                 i
             })
         };
-        let shape = if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron };
+        let shape = Self::TENSOR;
         let mut cells = Cells::new();
         for c in 0..ncells {
             cells.push(shape, &block(cell_index(c).map(|i| i * p), &all_axes));
@@ -123,7 +128,7 @@ impl<const D: usize> CurvedMesh<D> {
                     if D == 2 && (d == 0) == (side == 0) {
                         nodes.reverse();
                     }
-                    boundary.push(if D == 2 { Shape::Line } else { Shape::Quadrilateral }, &nodes, 2 * d + side);
+                    boundary.push(shape.facet_shape(), &nodes, 2 * d + side);
                 }
             }
         }
@@ -161,7 +166,7 @@ impl<const D: usize> CurvedMesh<D> {
     /// boundary of prisms holds triangles and quads); a count no kind has
     /// is kept for `validate` to refuse.
     pub fn facets_at<C: AsRef<[usize]>>(p: usize, facets: impl IntoIterator<Item = (C, usize)>) -> Facets {
-        Facets::from_nodes(D - 1, p, if D == 2 { Shape::Line } else { Shape::Quadrilateral }, facets)
+        Facets::from_nodes(D - 1, p, Self::TENSOR.facet_shape(), facets)
     }
 
     /// The kinds of cell the mesh holds, in the order of [`Shape`].
@@ -349,11 +354,9 @@ impl CurvedMesh<2> {
     /// corners are already its lattice order), for code written for any
     /// order.
     pub fn from_quads<const N: usize>(m: &PlaneMesh<N>) -> Self {
-        let (shape, perm) = if N == 3 { (Shape::Triangle, vec![0, 1, 2]) } else { (Shape::Quadrilateral, gmsh_quad_order(1).expect("order 1")) };
-        let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&perm, c)).collect();
-        let boundary = m.edges.iter().map(|e| (Shape::Line, e.nodes, e.part)).collect();
-        let cells = Cells::from_cells(2, 1, shape, cells);
-        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+        let shape = if N == 3 { Shape::Triangle } else { Shape::Quadrilateral };
+        // an empty mesh keeps its kind
+        CurvedMesh { shape, ..CurvedMesh::linear(m.nodes.clone(), m.cells.iter().map(|c| (shape, c)), m.edges.iter().map(|e| (e.nodes, e.part)), m.part_names.clone()) }
     }
 }
 
@@ -365,8 +368,13 @@ impl CurvedMesh<2> {
     /// that kind.
     pub fn to_plane<const N: usize>(&self) -> Option<PlaneMesh<N>> {
         let cells = self.vertices_of_one_kind(if N == 3 { Shape::Triangle } else { Shape::Quadrilateral }, 2)?;
-        let edges = self.boundary.iter().map(|b| super::BoundaryEdge { nodes: [b.nodes[0], b.nodes[1]], part: b.part }).collect();
-        Some(PlaneMesh { nodes: self.nodes.clone(), cells, edges, part_names: self.part_names.clone() })
+        Some(PlaneMesh { nodes: self.nodes.clone(), cells, edges: self.boundary_edges(), part_names: self.part_names.clone() })
+    }
+
+    /// The boundary lines of a linear plane mesh, as Algorithm 1's meshes
+    /// hold them.
+    pub(super) fn boundary_edges(&self) -> Vec<super::BoundaryEdge> {
+        self.boundary.iter().map(|b| super::BoundaryEdge { nodes: [b.nodes[0], b.nodes[1]], part: b.part }).collect()
     }
 }
 
@@ -412,13 +420,9 @@ impl CurvedMesh<3> {
     /// [`CurvedMesh::from_quads`]; a tetrahedron's corners are its lattice
     /// order).
     pub fn from_hexes<const N: usize, const K: usize>(m: &SolidMesh<N, K>) -> Self {
-        let tet = N == 4;
-        let (cell, face) = if tet { (vec![0, 1, 2, 3], vec![0, 1, 2]) } else { (gmsh_hex_order(1).expect("order 1"), gmsh_quad_order(1).expect("order 1")) };
-        let cells: Vec<Vec<usize>> = m.cells.iter().map(|c| from_format(&cell, c)).collect();
-        let boundary = m.faces.iter().map(|f| (if tet { Shape::Triangle } else { Shape::Quadrilateral }, from_format(&face, &f.nodes), f.part)).collect();
-        let shape = if tet { Shape::Tetrahedron } else { Shape::Hexahedron };
-        let cells = Cells::from_cells(3, 1, shape, cells);
-        CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes: m.nodes.clone(), cells, boundary, part_names: m.part_names.clone() }
+        let shape = if N == 4 { Shape::Tetrahedron } else { Shape::Hexahedron };
+        // an empty mesh keeps its kind
+        CurvedMesh { shape, ..CurvedMesh::linear(m.nodes.clone(), m.cells.iter().map(|c| (shape, c)), m.faces.iter().map(|f| (f.nodes, f.part)), m.part_names.clone()) }
     }
 }
 
@@ -437,7 +441,7 @@ impl<const D: usize> CurvedMesh<D> {
         part_names: Vec<String>,
     ) -> Self {
         let cells: Cells = cells.into_iter().map(|(shape, v)| (shape, reordered(shape, v.as_ref()))).collect();
-        let shape = cells.blocks().first().map_or(if D == 2 { Shape::Quadrilateral } else { Shape::Hexahedron }, |b| b.shape);
+        let shape = cells.blocks().first().map_or(Self::TENSOR, |b| b.shape);
         let mut mesh = CurvedMesh { shape, p: 1, spacing: Spacing::Equispaced, nodes, cells, boundary: Facets::new(), part_names };
         mesh.set_linear_facets(facets);
         mesh
@@ -471,7 +475,7 @@ impl<const D: usize> CurvedMesh<D> {
             .into_iter()
             .map(|(f, part)| {
                 let f = f.as_ref();
-                let shape = Shape::with_nodes(D - 1, 1, f.len()).unwrap_or(if D == 2 { Shape::Line } else { Shape::Quadrilateral });
+                let shape = Shape::with_nodes(D - 1, 1, f.len()).unwrap_or(Self::TENSOR.facet_shape());
                 (shape, reordered(shape, f), part)
             })
             .collect();

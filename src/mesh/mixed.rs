@@ -8,7 +8,7 @@
 //! structured meshes of every kind the cases and tests use.
 
 use super::element::Shape;
-use super::linear::{cut_quad, orientation_flips, BoundaryEdge, BoundaryFace, HexMesh, Point2, Point3, QuadMesh, TetMesh, TriMesh};
+use super::linear::{cut_quad, orientation_flips, BoundaryFace, HexMesh, Point2, Point3, QuadMesh, TetMesh, TriMesh};
 use super::CurvedMesh;
 use smallvec::SmallVec;
 
@@ -48,8 +48,7 @@ impl CurvedMesh<2> {
             }
             owner.resize(cells.len(), c);
         }
-        let edges = self.boundary.iter().map(|b| BoundaryEdge { nodes: [b.nodes[0], b.nodes[1]], part: b.part }).collect();
-        (TriMesh { nodes: self.nodes.clone(), cells, edges, part_names: self.part_names.clone() }, owner)
+        (TriMesh { nodes: self.nodes.clone(), cells, edges: self.boundary_edges(), part_names: self.part_names.clone() }, owner)
     }
 
     /// Turns clockwise cells of a linear mesh counter-clockwise, quads
