@@ -261,13 +261,19 @@ fn run(cli: Cli) -> Result<()> {
             }
             let memory = r.peak_memory_mib.map_or(String::new(), |m| format!("  peak memory {m:.0} MiB"));
             let snap = &r.quality.snap_first;
-            if snap.kept {
+            let repair = &r.quality.repair;
+            if let Some(why) = snap.refused.as_ref().filter(|_| repair.won != "whole mesh") {
+                println!("snap: not kept as it was ({why})");
+                print!("{}", format_candidates(repair));
+                println!("time: snap, repair and certification {:.3}s  total {:.3}s{memory}", r.certify_s + r.algorithm2_s, r.total_s);
+            } else if snap.kept {
                 let places = if snap.fitted { "fitted places" } else { "places at equal arc length (the fitted ones cost a cell its shape)" };
                 println!("snap: new boundary nodes put at their {places} on the shapes, every element valid and within {} of its straight scaled Jacobian or of the straight mesh's least: Algorithm 2 not run", deformesh::highorder::curve::SNAP_KEEP);
                 println!("time: snap and certification {:.3}s  total {:.3}s{memory}", r.certify_s + r.algorithm2_s, r.total_s);
             } else {
                 if let Some(why) = &snap.refused {
-                    println!("snap: not kept ({why}): Algorithm 2");
+                    println!("snap: not kept ({why})");
+                    print!("{}", format_candidates(repair));
                 }
                 println!("{}", settling_line(&r.quality.settling, r.quality.boundary_data.dirichlet));
                 let runs = if r.algorithm2_runs > 1 { format!(", run {} times", r.algorithm2_runs) } else { String::new() };
@@ -503,4 +509,24 @@ fn settling_line(s: &deformesh::highorder::curve::Settling, dirichlet: bool) -> 
             format!("settling: new boundary nodes put at their {places} along the arcs ({}, largest move {:.2e}){demoted}", how.unwrap_or("-"), s.largest_move)
         }
     }
+}
+
+/// The candidates of a `curve` run after a refused snap, a line each, and
+/// which was written and why.
+fn format_candidates(r: &deformesh::highorder::repair::Repair) -> String {
+    let mut out = String::new();
+    for c in r.candidates.iter().filter(|c| c.name != "snap") {
+        let size = match c.rings {
+            Some(k) => format!(" of {k} rings ({} elements, {:.1} % of the mesh)", c.elements, 100.0 * c.share),
+            None => String::new(),
+        };
+        let result = match (&c.ended, c.min_scaled_jacobian) {
+            (Some(why), _) => format!("ended: {why}"),
+            (None, Some(m)) => format!("valid, least scaled Jacobian {m:.4}"),
+            (None, None) => format!("{} element(s) not certified valid", c.invalid),
+        };
+        out += &format!("candidate: {}{size}: {result} ({:.3}s)\n", c.name, c.seconds);
+    }
+    out += &format!("written: {}: {}\n", r.won, r.why);
+    out
 }

@@ -122,7 +122,9 @@ pub mod exit {
     /// The mesh is, or would become, invalid (the elements are named;
     /// nothing is written).
     pub const INVALID_MESH: i32 = 2;
-    /// A linear solve failed (the solver, not the input; nothing written).
+    /// A linear solve failed (the solver, not the input), or a run of the
+    /// method ended without reaching t = 1 (its steps stalled or spent
+    /// their budget) and no other candidate was valid; nothing written.
     pub const SOLVER: i32 = 3;
     /// A library the command needs is absent (Gmsh's, for `--cad`):
     /// BSD's EX_UNAVAILABLE.
@@ -145,7 +147,7 @@ impl RunError {
             | RunError::Deform(DeformError::InvalidStart(_))
             | RunError::Curve(CurveError::InvalidCoarse(_))
             | RunError::Curve(CurveError::Deform(DeformError::Tangled { .. })) => exit::INVALID_MESH,
-            RunError::Deform(DeformError::Solve(_)) | RunError::Curve(CurveError::Deform(DeformError::Solve(_))) => exit::SOLVER,
+            RunError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. }) | RunError::Curve(CurveError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. })) => exit::SOLVER,
             RunError::Cad(crate::geometry::cad::CadError::Absent { .. } | crate::geometry::cad::CadError::Library { .. }) => exit::UNAVAILABLE,
             _ => exit::BAD_INPUT,
         }

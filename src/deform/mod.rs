@@ -260,6 +260,17 @@ pub enum DeformError {
         /// The value found.
         g: f64,
     },
+    /// The steps no longer advance t, or the run spent its budget of
+    /// steps ([`DeformOptions::max_steps`]): it is ended, not left to run.
+    #[error("the run stalled at t = {t:.4} after {steps} steps: {why}")]
+    Stalled {
+        /// The pseudo-time reached.
+        t: f64,
+        /// Accepted steps.
+        steps: usize,
+        /// Which rule ended it.
+        why: String,
+    },
     /// The starting mesh is invalid.
     #[error("the starting mesh has {} inverted cell(s), first {:?}", .0.len(), &.0[..(.0.len().min(10))])]
     InvalidStart(Vec<usize>),
@@ -488,7 +499,22 @@ pub struct DeformOptions {
     /// [`crate::solve::default_factor_bytes`] (a quarter of the memory
     /// available).
     pub factor_bytes: Option<u64>,
+    /// Most accepted steps of one run; None: no budget but the stall
+    /// rule ([`STALL_WINDOW`]).
+    pub max_steps: Option<usize>,
 }
+
+/// Every run ends: a run whose last `STALL_WINDOW` accepted steps together
+/// advanced t by less than [`STALL_ADVANCE`] ends with
+/// [`DeformError::Stalled`]. Why: the step control may accept ever smaller
+/// steps where the strain it limits grows without bound (measured on the
+/// tet ball in a box at p = 2: t stuck at 0.2102 for hundreds of steps,
+/// each reassembling, over 900 s).
+pub const STALL_WINDOW: usize = 20;
+
+/// See [`STALL_WINDOW`]: a nominal run takes at most 1/40 of t a step, so
+/// 20 steps advancing it by less than 1e-3 in all are 500 times shorter.
+pub const STALL_ADVANCE: f64 = 1e-3;
 
 /// Up to these many unknowns a solve that failed may turn to a Cholesky
 /// factor ([`DeformOptions::factor_limit`]), if its symbolic analysis
@@ -521,6 +547,7 @@ impl Default for DeformOptions {
             max_iterations: None,
             factor_limit: FALLBACK_FACTOR_LIMIT,
             factor_bytes: None,
+            max_steps: None,
         }
     }
 }
@@ -564,6 +591,8 @@ pub struct Deformation<M: Q1Mesh<D, N> = crate::mesh::QuadMesh, const D: usize =
     // and size, kept by rotating buffers: a solve that fails at the end of
     // that step retakes it smaller from there
     back: Back<<M::Boundary as BoundaryModel<D>>::State, D>,
+    /// The step count and t at the start of the stall rule's window.
+    mark: (usize, f64),
 }
 
 /// Where the last accepted step started, and what solver failures have
@@ -652,6 +681,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             saved_state: boundary.state().clone(),
             initial_state: boundary.state().clone(),
             back: Back { nodes: mesh.nodes().to_vec(), state: boundary.state().clone(), k1: vec![[0.0; D]; n], t: 0.0, h: 0.0, valid: false, cap: f64::INFINITY, failed_at: 0.0, retakes: 0, solved: None },
+            mark: (0, 0.0),
             mesh,
             boundary,
             field,
@@ -671,6 +701,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.back.valid = false;
         self.back.cap = f64::INFINITY;
         self.back.retakes = 0;
+        self.mark = (self.stats.steps, 0.0);
     }
 
     /// The boundary parts.
@@ -761,6 +792,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
                 h = h.min(self.next_step);
             }
             self.step(h)?;
+            self.check_advancing()?;
             if (self.t - target).abs() < 1e-12 {
                 self.t = target;
                 if stops.peek().is_some() {
@@ -790,6 +822,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
                 h = h.min(self.next_step);
             }
             self.step(h)?;
+            self.check_advancing()?;
             if self.t < 1.0 - 1e-12 && !go_on(self) {
                 return Ok(false);
             }
@@ -867,6 +900,28 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             }
         }
         unreachable!("the loop returns on its last attempt")
+    }
+
+    /// Ends a run short of t = 1 whose steps no longer advance t
+    /// ([`STALL_WINDOW`]) or that spent its budget
+    /// ([`DeformOptions::max_steps`]).
+    fn check_advancing(&mut self) -> Result<(), DeformError> {
+        if self.t >= 1.0 - 1e-12 {
+            return Ok(());
+        }
+        let (steps, t) = (self.stats.steps, self.t);
+        if let Some(max) = self.options.max_steps.filter(|&m| steps >= m) {
+            return Err(DeformError::Stalled { t, steps, why: format!("its budget of {max} steps is spent") });
+        }
+        if steps >= self.mark.0 + STALL_WINDOW {
+            let advance = t - self.mark.1;
+            // (a run of very many nominal steps advances less per window)
+            if advance < STALL_ADVANCE.min(STALL_WINDOW as f64 / (2.0 * self.options.steps.max(1) as f64)) {
+                return Err(DeformError::Stalled { t, steps, why: format!("its last {STALL_WINDOW} steps advanced t by {advance:.2e} in all (the step control cut them to {:.2e})", self.back.h) });
+            }
+            self.mark = (steps, t);
+        }
+        Ok(())
     }
 
     /// Why no smaller step was tried after a failed solve, for the message.

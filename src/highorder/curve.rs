@@ -16,6 +16,7 @@ use crate::refine::{refine_parts, subdivide, subdivide_mixed, subdivide_mixed_so
 use crate::deform::{BoundaryPart, DeformError, DeformOptions, Deformation, PartKind, RunStats, SolverChoice, THIN_ASPECT, THIN_TOLERANCE};
 use crate::mesh::{CurvedMesh, Facet};
 use crate::jacobian::JacobianField;
+use super::repair::{Candidate, Repair, MAX_STEPS};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -277,6 +278,9 @@ pub struct CurvedQuality {
     pub band: Band,
     /// The snap tried before Algorithm 2 ([`CurveOptions::snap_first`]).
     pub snap_first: SnapFirst,
+    /// The candidates (the snap, its repairs in patches, the whole mesh)
+    /// and which was written ([`super::repair`]).
+    pub repair: Repair,
 }
 
 /// What the snap before Algorithm 2 did ([`CurveOptions::snap_first`]).
@@ -676,7 +680,7 @@ fn tighten(certs: &mut [Certificate], certify: impl Fn(usize) -> Certificate + S
 
 /// Certifies straight order-p elements as the order-1 elements of their
 /// corners ([`certify_mesh_straight`]).
-struct Linear {
+pub(super) struct Linear {
     certifiers: Certifiers,
     /// Per kind, the positions in the order-p element of the order-1
     /// element's nodes in its own order (the tensor order of the corners
@@ -688,7 +692,7 @@ struct Linear {
 }
 
 impl Linear {
-    fn new<const D: usize>(mesh: &CurvedMesh<D>) -> Result<Self, HighOrderError> {
+    pub(super) fn new<const D: usize>(mesh: &CurvedMesh<D>) -> Result<Self, HighOrderError> {
         let shapes = mesh.shapes();
         let corners = |s: Shape| (s != Shape::Pyramid).then(|| crate::mesh::element::corner_indices(s, mesh.p));
         Ok(Linear { certifiers: Certifiers::new(&shapes, 1, mesh.spacing)?, corners: shapes.iter().map(|&s| (s, corners(s))).collect(), samples: 3 * mesh.p + 1 })
@@ -697,7 +701,7 @@ impl Linear {
     /// Cell `c`'s certificate as an order-1 element (its other nodes are
     /// taken to be straight), sampled on the order-p grid; a pyramid's by
     /// `order_p`, the order-p certifiers.
-    fn certify<const D: usize>(&self, order_p: &Certifiers, mesh: &CurvedMesh<D>, c: usize, opts: &CertifyOptions) -> Certificate {
+    pub(super) fn certify<const D: usize>(&self, order_p: &Certifiers, mesh: &CurvedMesh<D>, c: usize, opts: &CertifyOptions) -> Certificate {
         let shape = mesh.cell_shape(c);
         match &self.corners[&shape] {
             Some(at) => {
@@ -729,6 +733,7 @@ fn summary<const D: usize>(mesh: &CurvedMesh<D>, certs: &[Certificate]) -> Curve
         boundary_data: BoundaryData::default(),
         band: Band::default(),
         snap_first: SnapFirst::default(),
+        repair: Repair::default(),
     }
 }
 
@@ -849,26 +854,57 @@ where
 {
     let p = opts.order;
     let mut certify_s = 0.0;
+    let mut progress = progress;
     let mut snap_first = SnapFirst { tried: opts.snap_first && !opts.dirichlet, ..Default::default() };
-    let snapped = if snap_first.tried { snap_straight(sub, names, &parts2, opts, &mut certify_s)? } else { Err(String::new()) };
-    let (pass, attempts, parts2) = match snapped {
-        Ok((pass, fitted)) => {
+    let outcome = if snap_first.tried { Some(snap_straight(sub, names, &parts2, opts, &mut certify_s)?) } else { None };
+    let mut repair = Repair::default();
+    let found = match outcome {
+        Some(SnapOutcome::Kept(pass, fitted)) => {
             tracing::info!("the snap kept every element valid and shaped: Algorithm 2 not run");
             (snap_first.kept, snap_first.fitted) = (true, fitted);
-            (pass, 0, parts2)
+            (repair.won, repair.why) = ("snap".into(), "every element certified valid and shaped".into());
+            Some(pass)
         }
-        Err(why) => {
-            if snap_first.tried {
-                tracing::info!("the snap was not kept ({why}): Algorithm 2");
-                snap_first.refused = Some(why);
-            }
-            let (pass, attempts, seconds, parts2) = deformed(sub, (names, aspect), parts2, opts, progress)?;
+        Some(SnapOutcome::Refused(snap)) => {
+            tracing::info!("the snap was not kept ({}): repair in patches", snap.why);
+            snap_first.refused = Some(snap.why.clone());
+            let (found, report) = super::repair::in_patches(sub, &parts2, opts, &snap, &mut certify_s, &mut progress)?;
+            repair = report;
+            (snap_first.kept, snap_first.fitted) = (repair.won == "snap", snap.fitted);
+            found
+        }
+        None => None,
+    };
+    let (pass, attempts, parts2) = match found {
+        Some(pass) => (pass, 0, parts2),
+        None => {
+            // the whole mesh moves: Algorithm 2 proper
+            let t0 = Instant::now();
+            let run = deformed(sub, (names, aspect), parts2, opts, &mut progress);
+            let seconds = t0.elapsed().as_secs_f64();
+            let ended = run.as_ref().err().map(|e| with_causes(e));
+            let elements = sub.elements.len();
+            let judged = run.as_ref().ok().map(|r| &r.0.quality);
+            repair.candidates.push(Candidate {
+                name: "whole mesh".into(),
+                rings: None,
+                elements,
+                share: 1.0,
+                invalid: judged.map_or(0, |q| q.invalid_elements.len()),
+                min_scaled_jacobian: judged.filter(|q| q.invalid_elements.is_empty()).map(|q| q.scaled_jacobian.min),
+                seconds,
+                ended,
+            });
+            let (pass, attempts, seconds, parts2) = run?;
             certify_s += seconds;
+            repair.won = "whole mesh".into();
+            repair.why = if snap_first.tried { "neither the snap nor a patch left every element certified valid".into() } else { "the snap was not tried".into() };
             (pass, attempts, parts2)
         }
     };
     let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = pass;
     quality.snap_first = snap_first;
+    quality.repair = repair;
     let alg2 = clock.elapsed().as_secs_f64() - certify_s;
     let clock = Instant::now();
     let fine_facets: Vec<(Vec<usize>, usize)> = mesh.boundary.iter().map(|b| (b.nodes.to_vec(), b.part)).collect();
@@ -930,8 +966,8 @@ where
     // `auto` picks multigrid-preconditioned CG for 3D Algorithm 2 above
     // a few thousand nodes, as for Algorithm 1
     let steps: Vec<DeformOptions> = match opts.steps {
-        Some(n) => vec![DeformOptions { steps: n.max(1), max_strain: None, ..opts.flow.clone() }],
-        None => AUTO_STEPS.iter().map(|&n| DeformOptions { steps: n, max_strain: Some(opts.step_change), ..opts.flow.clone() }).collect(),
+        Some(n) => vec![DeformOptions { steps: n.max(1), max_strain: None, max_steps: Some(MAX_STEPS.max(2 * n)), ..opts.flow.clone() }],
+        None => AUTO_STEPS.iter().map(|&n| DeformOptions { steps: n, max_strain: Some(opts.step_change), max_steps: Some(MAX_STEPS), ..opts.flow.clone() }).collect(),
     };
     // per step size, sliding first, then the paper's Dirichlet data: a
     // sliding node glides along the curving wall by a straight Euler step
@@ -1204,14 +1240,14 @@ fn with_dirichlet_data<const D: usize>(parts: &[BoundaryPart<D>]) -> Vec<Boundar
 }
 
 /// A curved mesh as a pass of Algorithm 2 left it, certified.
-struct Pass<const D: usize> {
-    mesh: CurvedMesh<D>,
-    certificates: Vec<Certificate>,
-    quality: CurvedQuality,
-    stats: RunStats,
-    solver: crate::deform::SolverReport,
+pub(super) struct Pass<const D: usize> {
+    pub mesh: CurvedMesh<D>,
+    pub certificates: Vec<Certificate>,
+    pub quality: CurvedQuality,
+    pub stats: RunStats,
+    pub solver: crate::deform::SolverReport,
     /// The largest distance of a moved boundary node to its shape.
-    moved_distance: f64,
+    pub moved_distance: f64,
 }
 
 /// The settling pass ([`CurveOptions::settle`]) on a sliding result: its
@@ -1351,7 +1387,7 @@ where
         return Ok(Pass { mesh: snapped, certificates, quality, stats: slid.stats.clone(), solver: slid.solver.clone(), moved_distance });
     }
     // the correction is small: as few steps as the step control allows
-    let flow = DeformOptions { steps: 1, max_strain: Some(opts.step_change), ..opts.flow.clone() };
+    let flow = DeformOptions { steps: 1, max_strain: Some(opts.step_change), max_steps: Some(MAX_STEPS), ..opts.flow.clone() };
     let start = sub.refine_mesh().settling(&slid.mesh.nodes, plan.clone());
     let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(start, parts.to_vec(), JacobianField::uniform(), flow)?;
     def.run(&[], |_| {}, |_| {})?;
@@ -1403,23 +1439,53 @@ fn moved_cells<const D: usize>(mesh: &CurvedMesh<D>, before: &[[f64; D]]) -> Vec
     (0..mesh.cells.len()).filter(|&c| mesh.cells[c].iter().any(|&n| mesh.nodes[n] != before[n])).collect()
 }
 
+/// What the snap before Algorithm 2 gave ([`snap_straight`]).
+pub(super) enum SnapOutcome<const D: usize> {
+    /// Every element certified valid and shaped: the result, and whether
+    /// its places were the fitted ones.
+    Kept(Pass<D>, bool),
+    /// Not kept: what it left, for the repair in patches.
+    Refused(Snap<D>),
+}
+
+/// A snap that was not kept: the try that left the fewest elements
+/// invalid (the fitted places on a tie).
+pub(super) struct Snap<const D: usize> {
+    /// The snapped mesh.
+    pub mesh: CurvedMesh<D>,
+    /// Its new nodes are at their fitted places.
+    pub fitted: bool,
+    /// The largest distance of a moved boundary node to its shape.
+    pub moved_distance: f64,
+    /// The largest move of a node.
+    pub largest_move: f64,
+    /// The elements to repair: those not certified valid, or (if none)
+    /// those under [`SNAP_KEEP`] of their straight scaled Jacobian and
+    /// of the straight mesh's least; ascending.
+    pub bad: Vec<usize>,
+    /// Whether every element is certified valid (only sheared ones bad).
+    pub valid: bool,
+    /// Why it was not kept.
+    pub why: String,
+}
+
 /// Gmsh's `setOrder` way, tried before Algorithm 2
 /// ([`CurveOptions::snap_first`]): every new node of a curved facet put on
 /// its shape at its fitted place (or, where that is not kept, at equal arc
 /// length), every other node left at its straight place. Kept, with
 /// whether the places were the fitted ones, if every element is certified
 /// valid and each element the snap moved keeps [`SNAP_KEEP`] of its
-/// straight scaled Jacobian or of the straight mesh's least; else why
-/// not. The elements the snap moves are
+/// straight scaled Jacobian or of the straight mesh's least; else what it
+/// left. The elements the snap moves are
 /// checked first (validity by its sign, the scaled Jacobians sampled,
 /// straight and snapped); every element is certified once it is kept.
-fn snap_straight<M, const D: usize, const N: usize>(
+pub(super) fn snap_straight<M, const D: usize, const N: usize>(
     sub: &Subdivision<M, D>,
     names: &[String],
     parts: &[BoundaryPart<D>],
     opts: &CurveOptions,
     certify_s: &mut f64,
-) -> Result<Result<(Pass<D>, bool), String>, CurveError>
+) -> Result<SnapOutcome<D>, CurveError>
 where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
@@ -1427,8 +1493,16 @@ where
     let straight = fine_mesh(sub, names, opts.spacing, sub.fine.nodes().to_vec());
     let certifiers = Certifiers::new(&straight.shapes(), straight.p, straight.spacing)?;
     let linear = Linear::new(&straight)?;
-    let mut why = String::new();
+    let mut refused: Option<Snap<D>> = None;
     for fitted in [true, false] {
+        // a few elements left by the fitted places are the repair's to
+        // mend, keeping the fit's accuracy elsewhere; equal arc length is
+        // tried where the fit sheared more (a thin layer's first cells:
+        // [`FIT_KEEP`]) (on CAD each try costs projections: 2.2 s of the
+        // 9.8 s of the 2,271-tet OCC torus at p = 3)
+        if !fitted && refused.as_ref().is_some_and(|r| r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64) {
+            break;
+        }
         let mut plan = SettlePlan::new(straight.nodes.len());
         if !fitted {
             plan.places.fill(Settle::Arc);
@@ -1453,7 +1527,10 @@ where
         let invalid: Vec<usize> = touched.iter().zip(&fresh).filter(|(_, f)| f.is_none()).map(|(&c, _)| c).collect();
         if let Some(&c) = invalid.first() {
             *certify_s += t0.elapsed().as_secs_f64();
-            why = format!("at {places} places, {} of the {} elements it moves are not certified valid, the first element {c}", invalid.len(), touched.len());
+            if better(&refused, invalid.len(), false) {
+                let why = format!("at {places} places, {} of the {} elements it moves are not certified valid, the first element {c}", invalid.len(), touched.len());
+                refused = Some(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad: invalid, valid: false, why });
+            }
             continue;
         }
         // the straight elements' certificates are those of their order-1
@@ -1489,13 +1566,19 @@ where
         }
         if let Some(&(c, was, now)) = lost.iter().min_by(|a, b| (a.2 / a.1).total_cmp(&(b.2 / b.1))) {
             *certify_s += t0.elapsed().as_secs_f64();
-            let now = if now.is_finite() { format!("{now:.3}") } else { "not certified valid".into() };
-            why = format!(
-                "at {places} places, {} of the {} elements it moves fell under {} of their straight scaled Jacobian and of the straight mesh's least, or were not certified valid; the worst, element {c}: {was:.3} straight, {now} snapped",
-                lost.len(),
-                touched.len(),
-                SNAP_KEEP
-            );
+            let valid = lost.iter().all(|l| l.2.is_finite());
+            if better(&refused, lost.len(), valid) {
+                let now = if now.is_finite() { format!("{now:.3}") } else { "not certified valid".into() };
+                let why = format!(
+                    "at {places} places, {} of the {} elements it moves fell under {} of their straight scaled Jacobian and of the straight mesh's least, or were not certified valid; the worst, element {c}: {was:.3} straight, {now} snapped",
+                    lost.len(),
+                    touched.len(),
+                    SNAP_KEEP
+                );
+                let mut bad: Vec<usize> = lost.iter().map(|l| l.0).collect();
+                bad.sort_unstable();
+                refused = Some(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad, valid, why });
+            }
             continue;
         }
         let mut known = straight_known;
@@ -1505,13 +1588,25 @@ where
         let (certificates, mut quality) = certify_mesh_straight(&snapped, &straight.nodes, &known)?;
         *certify_s += t0.elapsed().as_secs_f64();
         if !quality.invalid_elements.is_empty() {
-            return Ok(Err(format!("{} elements it did not move are not certified valid, the first {}", quality.invalid_elements.len(), quality.invalid_elements[0])));
+            let why = format!("{} elements it did not move are not certified valid, the first {}", quality.invalid_elements.len(), quality.invalid_elements[0]);
+            let bad = quality.invalid_elements.clone();
+            return Ok(SnapOutcome::Refused(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad, valid: false, why }));
         }
         quality.settling = Settling { largest_move, fitted, ..Default::default() };
         let pass = Pass { mesh: snapped, certificates, quality, stats: RunStats::default(), solver: Default::default(), moved_distance };
-        return Ok(Ok((pass, fitted)));
+        return Ok(SnapOutcome::Kept(pass, fitted));
     }
-    Ok(Err(why))
+    Ok(SnapOutcome::Refused(refused.expect("a try that was not kept left its snap")))
+}
+
+/// The share of the elements above which a snap at the fitted places that
+/// was not kept is tried again at equal arc length ([`snap_straight`]).
+pub const ARC_RETRY: f64 = 0.01;
+
+/// Whether a refused try that leaves `bad` elements to repair (all valid
+/// or not) is better than the one kept so far: valid first, then fewer.
+fn better<const D: usize>(refused: &Option<Snap<D>>, bad: usize, valid: bool) -> bool {
+    refused.as_ref().is_none_or(|r| if r.valid != valid { valid } else { bad < r.bad.len() })
 }
 
 /// How much of an element's scaled Jacobian a snap of the settling pass

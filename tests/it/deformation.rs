@@ -361,3 +361,37 @@ fn a_step_that_would_tangle_is_halved_and_the_run_ends_valid() {
     assert!(diff < 0.08, "{diff} from the 10-step mesh");
     assert!(r.min > 0.50 && r.max < 1.71, "J/f in [{}, {}]", r.min, r.max);
 }
+
+/// The demo's quarter disk with `options` changed by `edit`, run to its
+/// end: the error it ended with, and the steps it took.
+fn quarter_disk_ending(edit: impl Fn(&mut deformesh::deform::DeformOptions)) -> (deformesh::deform::DeformError, usize) {
+    let case = Case::parse(DEMO_CASE, "quarter_disk").unwrap();
+    let mut s = case.setup("quarter_disk", Path::new(".")).unwrap();
+    edit(&mut s.options);
+    let mut d = Deformation::new(s.mesh, s.parts, s.field, s.options).unwrap();
+    let e = d.run(&[], |_| {}, |_| {}).expect_err("the run must end short of t = 1");
+    (e, d.stats.steps)
+}
+
+/// Every run ends (issue 42): a step control that accepts ever smaller
+/// steps (here one allowing a change of 1e-9 of a corner's Jacobian per
+/// step) ends after one window of steps that no longer advance t, with
+/// its reason; a run that spends its budget of steps ends there.
+#[test]
+fn a_stalled_step_control_and_a_spent_budget_end_the_run_with_their_reason() {
+    use deformesh::deform::{DeformError, STALL_WINDOW};
+    let (e, steps) = quarter_disk_ending(|o| o.max_strain = Some(1e-9));
+    match &e {
+        DeformError::Stalled { t, steps: at, why } => {
+            assert!(*t < 1e-3, "t = {t}");
+            assert_eq!(*at, steps);
+            assert!(why.contains(&format!("last {STALL_WINDOW} steps advanced t by")), "{why}");
+        }
+        other => panic!("not a stall: {other}"),
+    }
+    // the first window: the rule looks at no more steps than that
+    assert_eq!(steps, STALL_WINDOW, "{e}");
+    let (e, steps) = quarter_disk_ending(|o| o.max_steps = Some(7));
+    assert!(matches!(&e, DeformError::Stalled { t, why, .. } if (*t - 7.0 / 40.0).abs() < 1e-12 && why.contains("budget of 7 steps")), "{e}");
+    assert_eq!(steps, 7);
+}

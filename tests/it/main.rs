@@ -24,6 +24,7 @@ mod prisms;
 mod real_programs;
 mod real_programs_hex;
 mod real_programs_highorder;
+mod repair;
 mod simplex_orders;
 mod simplices;
 mod solver_failure;
