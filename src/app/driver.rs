@@ -54,6 +54,16 @@ pub enum RunError {
         /// Their element tags in the input file.
         tags: Vec<u64>,
     },
+    /// No candidate of `curve` was certified valid: the snap left these
+    /// elements invalid and no run of Algorithm 2 (on patches around them
+    /// or the whole mesh) ended with them valid.
+    #[error("no result certified valid for {} element(s), by their tags in the file {:?}: {why}", tags.len(), &tags[..tags.len().min(20)])]
+    Unrepaired {
+        /// What was tried and how each ended.
+        why: String,
+        /// Their element tags in the input file.
+        tags: Vec<u64>,
+    },
     /// A picture failed.
     #[error("drawing the picture failed")]
     Render(#[from] RenderError),
@@ -147,7 +157,9 @@ impl RunError {
             | RunError::Deform(DeformError::InvalidStart(_))
             | RunError::Curve(CurveError::InvalidCoarse(_))
             | RunError::Curve(CurveError::Deform(DeformError::Tangled { .. })) => exit::INVALID_MESH,
-            RunError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. }) | RunError::Curve(CurveError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. })) => exit::SOLVER,
+            RunError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. })
+            | RunError::Curve(CurveError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. }) | CurveError::NoCandidate { .. })
+            | RunError::Unrepaired { .. } => exit::SOLVER,
             RunError::Cad(crate::geometry::cad::CadError::Absent { .. } | crate::geometry::cad::CadError::Library { .. }) => exit::UNAVAILABLE,
             _ => exit::BAD_INPUT,
         }
@@ -1222,6 +1234,10 @@ fn by_tag(e: RunError, tags: &[u64], per_cell: usize) -> RunError {
             what: format!("the curved mesh of order {order} has elements not certified valid (det J not positive over the whole element; certified min det J {min_det:.3e})"),
             tags: to_tags(&cells, 1),
         },
+        RunError::Curve(CurveError::NoCandidate { bad, tried, last, whole }) => {
+            let why = format!("the snap left them not certified valid; {}", crate::highorder::curve::unrepaired(&tried, &last, whole));
+            RunError::Unrepaired { why, tags: to_tags(&bad, 1) }
+        }
         RunError::Curve(CurveError::Deform(DeformError::Tangled { t, dt, cells })) => RunError::Elements {
             what: format!("Algorithm 2 (carrying the high-order boundary nodes onto the geometry): the mesh tangles at t = {t:.4} even with step {dt:.3e}"),
             tags: to_tags(&cells, per_cell),

@@ -102,6 +102,16 @@ impl Default for CurveOptions {
     }
 }
 
+/// What the repair tried and how the last run ended
+/// ([`CurveError::NoCandidate`]).
+pub fn unrepaired(tried: &str, last: &DeformError, whole: bool) -> String {
+    if whole {
+        format!("{tried}; Algorithm 2 on the whole mesh: {}", with_causes(last))
+    } else {
+        format!("{tried}; the larger patch stalled as the smaller did, as Algorithm 2 on the whole mesh would: not run")
+    }
+}
+
 /// An error and its causes, joined by ": " (so that a solver's reason is
 /// not lost where the error is shown as text, not as a chain).
 fn with_causes(e: &dyn std::error::Error) -> String {
@@ -137,6 +147,22 @@ pub enum CurveError {
     /// neighbouring group held a node off it (`after` true).
     #[error("{}", off_shape_message(.0))]
     OffShape(Box<OffShape>),
+    /// No candidate was certified valid: the snap left elements invalid,
+    /// no patch around them mended them, and Algorithm 2 on the whole
+    /// mesh ended without a result.
+    #[error("no result certified valid: the snap left {} element(s) not certified valid, the first {:?}; {}", bad.len(), &bad[..bad.len().min(10)], unrepaired(tried, last, *whole))]
+    NoCandidate {
+        /// The elements the snap left not certified valid.
+        bad: Vec<usize>,
+        /// The patches, and how each ended.
+        tried: String,
+        /// How the last run ended: the whole mesh's, or the patches'
+        /// where a larger patch stalled as the smaller did.
+        last: DeformError,
+        /// Whether the whole mesh ran (else a larger patch stalled as the
+        /// smaller did, and so would the whole mesh).
+        whole: bool,
+    },
 }
 
 // By hand, not `#[from]`: that would also make the DeformError the source,
@@ -858,6 +884,7 @@ where
     let mut snap_first = SnapFirst { tried: opts.snap_first && !opts.dirichlet, ..Default::default() };
     let outcome = if snap_first.tried { Some(snap_straight(sub, names, &parts2, opts, &mut certify_s)?) } else { None };
     let mut repair = Repair::default();
+    let mut snap_bad = Vec::new();
     let found = match outcome {
         Some(SnapOutcome::Kept(pass, fitted)) => {
             tracing::info!("the snap kept every element valid and shaped: Algorithm 2 not run");
@@ -868,10 +895,14 @@ where
         Some(SnapOutcome::Refused(snap)) => {
             tracing::info!("the snap was not kept ({}): repair in patches", snap.why);
             snap_first.refused = Some(snap.why.clone());
-            let (found, report) = super::repair::in_patches(sub, &parts2, opts, &snap, &mut certify_s, &mut progress)?;
-            repair = report;
+            let patched = super::repair::in_patches(sub, &parts2, opts, &snap, &mut certify_s, &mut progress)?;
+            repair = patched.report;
             (snap_first.kept, snap_first.fitted) = (repair.won == "snap", snap.fitted);
-            found
+            if let (None, Some(last)) = (&patched.best, patched.stalled) {
+                return Err(CurveError::NoCandidate { bad: snap.bad, tried: super::repair::tried(&repair), last, whole: false });
+            }
+            snap_bad = snap.bad;
+            patched.best
         }
         None => None,
     };
@@ -895,7 +926,10 @@ where
                 seconds,
                 ended,
             });
-            let (pass, attempts, seconds, parts2) = run?;
+            let (pass, attempts, seconds, parts2) = match run {
+                Err(CurveError::Deform(last @ (DeformError::Stalled { .. } | DeformError::Solve(_)))) if snap_first.tried => return Err(CurveError::NoCandidate { bad: snap_bad, tried: super::repair::tried(&repair), last, whole: true }),
+                run => run?,
+            };
             certify_s += seconds;
             repair.won = "whole mesh".into();
             repair.why = if snap_first.tried { "neither the snap nor a patch left every element certified valid".into() } else { "the snap was not tried".into() };

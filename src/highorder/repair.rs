@@ -44,6 +44,10 @@ pub const PATCH_SHARE: f64 = 0.5;
 /// so far to replace it: less is within the certificates' sampling.
 pub const GAIN: f64 = 0.01;
 
+/// Two stalls at pseudo-times closer than this are the same stall
+/// ([`Patched::stalled`]).
+pub const STALL_SAME: f64 = 1e-3;
+
 /// Most accepted steps of one run of Algorithm 2 on a patch or on the
 /// whole mesh ([`DeformOptions::max_steps`]): every run ends. The most a
 /// run took on the meshes measured is the 1e-5 extruded layer's 6 steps
@@ -190,7 +194,7 @@ fn run_patch<M, const D: usize, const N: usize>(
     (in_patch, slide): (&[bool], bool),
     certifiers: &Certifiers,
     progress: &mut impl FnMut(f64, &RunStats),
-) -> Result<Result<Repaired<D>, String>, CurveError>
+) -> Result<Result<Repaired<D>, DeformError>, CurveError>
 where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
@@ -202,7 +206,7 @@ where
         Some(n) => vec![n.max(1)],
         None => AUTO_STEPS.to_vec(),
     };
-    let mut last = Err(String::from("no run"));
+    let mut last = None;
     for steps in steps {
         let max_strain = opts.steps.is_none().then_some(opts.step_change);
         let mut flow = DeformOptions { steps, max_strain, max_steps: Some(MAX_STEPS), ..opts.flow.clone() };
@@ -218,11 +222,11 @@ where
             // step control has already cut them as far as they go
             Err(e @ DeformError::Stalled { .. }) => {
                 tracing::info!("a patch of {} elements: {e}", elements.len());
-                return Ok(Err(e.to_string()));
+                return Ok(Err(e));
             }
             Err(e @ (DeformError::Tangled { .. } | DeformError::Solve(_))) => {
                 tracing::info!("a patch of {} elements, {steps} nominal steps: {e}", elements.len());
-                last = Err(e.to_string());
+                last = Some(Err(e));
                 continue;
             }
             Err(e) => return Err(e.into()),
@@ -245,9 +249,26 @@ where
             return Ok(Ok(repaired));
         }
         tracing::info!("a patch of {} elements, sliding, {steps} nominal steps: {invalid} not certified valid", elements.len());
-        last = Ok(repaired);
+        last = Some(Ok(repaired));
     }
-    Ok(last)
+    Ok(last.expect("at least one run"))
+}
+
+/// The patches tried, and how each ended, for a message.
+pub fn tried(r: &Repair) -> String {
+    let each = r.candidates.iter().filter(|c| c.rings.is_some()).map(|c| {
+        let what = match c.rings {
+            Some(k) => format!("a {} of {k} rings ({} elements)", c.name, c.elements),
+            None => format!("the {}", c.name),
+        };
+        let how = match (&c.ended, c.min_scaled_jacobian) {
+            (Some(why), _) => format!("ended: {why}"),
+            (None, Some(m)) => format!("valid, least scaled Jacobian {m:.4}"),
+            (None, None) => format!("left {} element(s) not certified valid", c.invalid),
+        };
+        format!("{what} {how}")
+    });
+    each.collect::<Vec<_>>().join("; ")
 }
 
 /// The least scaled Jacobian of `certs`, None if one is not valid.
@@ -255,10 +276,23 @@ fn least(certs: impl Iterator<Item = Certificate>) -> Option<f64> {
     certs.map(|c| c.valid.then_some(c.min_scaled_jacobian)).try_fold(f64::INFINITY, |m, s| s.map(|s| m.min(s)))
 }
 
-/// The snap's elements to repair, repaired in growing patches; the best
-/// certified candidate among the snap (where it is valid) and the
-/// patches, with the report of every candidate. None where neither the
-/// snap nor a patch is valid: the whole mesh must move.
+/// What the repair in patches gave: the best certified candidate among
+/// the snap (where it is valid) and the patches, None where neither is
+/// valid; the report of every candidate; and where the runs on two
+/// patches, one the other's growth, stalled at the same pseudo-times (a
+/// stall is local: a sub-cell degenerating under its prescribed motion,
+/// which more room around it does not change), the stall, which Algorithm
+/// 2 on the whole mesh would meet too (measured on the tet ball at
+/// p = 2: patches of 242 and 1,512 elements and the whole mesh stall at
+/// t = 0.2099 alike).
+pub(super) struct Patched<const D: usize> {
+    pub best: Option<Pass<D>>,
+    pub report: Repair,
+    pub stalled: Option<DeformError>,
+}
+
+/// The snap's elements to repair, repaired in growing patches
+/// ([`Patched`]).
 pub(super) fn in_patches<M, const D: usize, const N: usize>(
     sub: &Subdivision<M, D>,
     parts: &[BoundaryPart<D>],
@@ -266,7 +300,7 @@ pub(super) fn in_patches<M, const D: usize, const N: usize>(
     snap: &Snap<D>,
     certify_s: &mut f64,
     mut progress: impl FnMut(f64, &RunStats),
-) -> Result<(Option<Pass<D>>, Repair), CurveError>
+) -> Result<Patched<D>, CurveError>
 where
     M: Subdividable<D, N>,
     RefineMesh<M, D>: crate::deform::Q1Mesh<D, N>,
@@ -303,6 +337,9 @@ where
         ended: None,
     });
     let mut best: Option<(Repaired<D>, usize, f64)> = None;
+    // the pseudo-times at which the last patch's runs stalled, if all did
+    let mut stalls: Option<Vec<f64>> = None;
+    let mut stalled = None;
     'grow: for rings in PATCH_RINGS {
         let in_patch = grow(mesh, &by_node, &snap.bad, rings);
         let elements: Vec<usize> = (0..all).filter(|&c| in_patch[c]).collect();
@@ -319,17 +356,24 @@ where
         // the new boundary nodes at the snap's places first (its boundary
         // accuracy); sliding, as Algorithm 2 proper, where that leaves an
         // element invalid: a node's place on the shape is then free too
+        let mut here = Some(Vec::new());
         for slide in [false, true] {
             let t0 = Instant::now();
             let run = run_patch(sub, parts, opts, mesh, (&in_patch, slide), &certifiers, &mut progress)?;
             let name = if slide { "patch (sliding)" } else { "patch" };
             let mut candidate = Candidate { name: name.into(), rings: Some(rings), elements: elements.len(), share, invalid: 0, min_scaled_jacobian: None, seconds: 0.0, ended: None };
             let valid = match run {
-                Err(why) => {
-                    candidate.ended = Some(why);
+                Err(e) => {
+                    candidate.ended = Some(e.to_string());
+                    match &e {
+                        DeformError::Stalled { t, .. } => here.get_or_insert_with(Vec::new).push(*t),
+                        _ => here = None,
+                    }
+                    stalled = Some(e);
                     false
                 }
                 Ok(r) => {
+                    here = None;
                     candidate.invalid = r.certificates.values().filter(|c| !c.valid).count();
                     candidate.min_scaled_jacobian = least(r.certificates.values().copied());
                     let shaped = candidate.invalid == 0 && elements.iter().zip(&straight_sj).all(|(c, &was)| r.certificates[c].min_scaled_jacobian >= SNAP_KEEP * was.min(floor));
@@ -356,14 +400,18 @@ where
         if elements.len() == all || best.is_some() {
             break;
         }
+        let same = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < STALL_SAME);
+        if let (Some(a), Some(b)) = (&stalls, &here) {
+            if same(a, b) {
+                tracing::info!("patches of {rings} rings and the one before stalled at the same pseudo-times {b:?}: no larger patch is tried");
+                return Ok(Patched { best: None, report: finish(report, snap_pass.is_some()), stalled });
+            }
+        }
+        stalls = here;
     }
     let Some((repaired, rings, _)) = best else {
-        let (won, why) = match &snap_pass {
-            Some(_) => ("snap", "every element is certified valid, and no patch repaired its sheared elements to a valid result"),
-            None => ("", "no patch left every element certified valid"),
-        };
-        (report.won, report.why) = (won.into(), why.into());
-        return Ok((snap_pass, report));
+        let report = finish(report, snap_pass.is_some());
+        return Ok(Patched { best: snap_pass, report, stalled: None });
     };
     // the repaired mesh, every element certified: the snap's certificates
     // stand outside the patch where it was certified
@@ -382,7 +430,7 @@ where
         Some(s) if s.quality.scaled_jacobian.min >= least_patch => {
             report.won = "snap".into();
             report.why = format!("valid, with a least scaled Jacobian of {:.4}, at least the repaired mesh's {least_patch:.4}", s.quality.scaled_jacobian.min);
-            Ok((Some(s), report))
+            Ok(Patched { best: Some(s), report, stalled: None })
         }
         other => {
             report.won = "patch".into();
@@ -390,9 +438,20 @@ where
                 Some(s) => format!("a patch of {rings} rings ({} elements) raised the least scaled Jacobian from the snap's {:.4} to {least_patch:.4}", report.candidates.iter().rev().find(|c| c.rings == Some(rings)).map_or(0, |c| c.elements), s.quality.scaled_jacobian.min),
                 None => format!("the snap left {} elements not certified valid; a patch of {rings} rings ({} elements) repaired them", snap.bad.len(), report.candidates.iter().rev().find(|c| c.rings == Some(rings)).map_or(0, |c| c.elements)),
             };
-            Ok((Some(patch), report))
+            Ok(Patched { best: Some(patch), report, stalled: None })
         }
     }
+}
+
+/// The report where no patch was valid: the snap won if it was valid.
+fn finish(mut report: Repair, snap_valid: bool) -> Repair {
+    if snap_valid {
+        report.won = "snap".into();
+        report.why = "every element is certified valid, and no patch repaired its sheared elements to a valid result".into();
+    } else {
+        report.why = "no patch left every element certified valid".into();
+    }
+    report
 }
 
 #[cfg(test)]

@@ -88,3 +88,28 @@ fn a_ball_in_a_box_whose_snap_shears_a_tetrahedron_keeps_the_better_repair() {
     }
     eprintln!("ball in a box p = 3: {c:?}, {:.2} s; Gmsh min SJ ours {ours}, setOrder {}", r.total_s, peers["setorder"]["min_sj"]);
 }
+
+/// The issue's tet ball (the box [-1.5, 1.5]³ minus the ball r = 0.5,
+/// 6,433 tetrahedra, `tests/data/tet_ball_stall.msh`) at p = 2: the snap
+/// leaves one sliver with all four vertices and two faces on the sphere
+/// inverted (as every Gmsh mode does). Algorithm 2 on the whole mesh used
+/// to run without end; now the patches' runs stall at the same pseudo-time
+/// for two sizes and the run ends: exit 3, the element by its tag in the
+/// file, every run's reason, nothing written.
+#[test]
+fn the_issue_tet_ball_at_p2_ends_with_its_reason_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_deformesh"))
+        .args(["curve", common::data("tet_ball_stall.msh").to_str().unwrap(), "--geometry", common::data("tet_ball_stall.geometry.toml").to_str().unwrap(), "--order", "2", "-o"])
+        .arg(dir.path().join("out/ball.msh"))
+        .env_remove("RUST_LOG")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    // the sliver is the file's element 7701 (0-based cell 6106)
+    assert!(stderr.contains("no result certified valid for 1 element(s), by their tags in the file [7701]"), "{stderr}");
+    assert!(stderr.contains("a patch (sliding) of 4 rings (1512 elements) ended: the run stalled at t = 0.2099") && stderr.contains("the larger patch stalled as the smaller did"), "{stderr}");
+    let written: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(written.is_empty() || std::fs::read_dir(dir.path().join("out")).unwrap().next().is_none(), "files were written");
+}
