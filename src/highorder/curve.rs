@@ -1529,12 +1529,13 @@ where
     let linear = Linear::new(&straight)?;
     let mut refused: Option<Snap<D>> = None;
     for fitted in [true, false] {
-        // a few elements left by the fitted places are the repair's to
-        // mend, keeping the fit's accuracy elsewhere; equal arc length is
-        // tried where the fit sheared more (a thin layer's first cells:
-        // [`FIT_KEEP`]) (on CAD each try costs projections: 2.2 s of the
-        // 9.8 s of the 2,271-tet OCC torus at p = 3)
-        if !fitted && refused.as_ref().is_some_and(|r| r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64) {
+        // a few elements the fitted places left valid but sheared are the
+        // repair's to mend, keeping the fit's accuracy elsewhere; equal arc
+        // length is tried where the fit sheared more (a thin layer's first
+        // cells: [`FIT_KEEP`]) or inverted one (on the OCC torus of 5,082
+        // tetrahedra at p = 2 the fitted places invert two that Gmsh's
+        // setOrder keeps valid) (on CAD each try costs projections)
+        if !fitted && refused.as_ref().is_some_and(|r| r.valid && r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64) {
             break;
         }
         let mut plan = SettlePlan::new(straight.nodes.len());
@@ -1557,7 +1558,18 @@ where
         let quick = CertifyOptions { max_splits: 0, ..Default::default() };
         let bracket = straight.shapes().iter().all(|s| matches!(s, Shape::Quadrilateral | Shape::Hexahedron));
         let first = if bracket { CertifyOptions::element() } else { quick };
-        let fresh: Vec<Option<Certificate>> = touched.par_iter().map(|&c| certifiers.of(snapped.cell_shape(c)).certify_if_valid(&snapped.cell_coords(c), &first)).collect();
+        let mut fresh: Vec<Option<Certificate>> = touched.par_iter().map(|&c| certifiers.of(snapped.cell_shape(c)).certify_if_valid(&snapped.cell_coords(c), &first)).collect();
+        // without splits a valid element can come out undecided: the few
+        // that did are certified again with them before they count as
+        // invalid (on the OCC torus of 5,082 tetrahedra at p = 2, two such
+        // sent a snap Gmsh finds valid, minSJ 0.833, to the repair)
+        if !bracket {
+            let again: Vec<usize> = (0..touched.len()).filter(|&k| fresh[k].is_none()).collect();
+            let redone: Vec<Option<Certificate>> = again.par_iter().map(|&k| certifiers.of(snapped.cell_shape(touched[k])).certify_if_valid(&snapped.cell_coords(touched[k]), &CertifyOptions::element())).collect();
+            for (k, cert) in again.into_iter().zip(redone) {
+                fresh[k] = cert;
+            }
+        }
         let invalid: Vec<usize> = touched.iter().zip(&fresh).filter(|(_, f)| f.is_none()).map(|(&c, _)| c).collect();
         if let Some(&c) = invalid.first() {
             *certify_s += t0.elapsed().as_secs_f64();
@@ -1634,7 +1646,8 @@ where
 }
 
 /// The share of the elements above which a snap at the fitted places that
-/// was not kept is tried again at equal arc length ([`snap_straight`]).
+/// was not kept, though valid, is tried again at equal arc length
+/// ([`snap_straight`]).
 pub const ARC_RETRY: f64 = 0.01;
 
 /// Whether a refused try that leaves `bad` elements to repair (all valid
