@@ -27,3 +27,4 @@ mod real_programs_highorder;
 mod simplex_orders;
 mod simplices;
 mod solver_failure;
+mod trust;
