@@ -85,7 +85,7 @@ fn out_of_memory(size: usize) -> ! {
             let _ = write!(text, " under the address-space limit (RLIMIT_AS, `ulimit -v`) of {:.0} MiB", mib(r.rlim_cur as u64));
         }
     }
-    let _ = write!(text, "; nothing was written. Lower --order, keep Algorithm 2 in its band (no --band all), or run where more memory is available\n");
+    let _ = write!(text, "; nothing was written. Ask for less (a lower --order, a coarser mesh, Algorithm 2 in its band rather than --band all) or run where more memory is available\n");
     #[cfg(unix)]
     // SAFETY: write and _exit are async-signal-safe and allocate nothing
     unsafe {

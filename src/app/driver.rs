@@ -920,7 +920,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let (dir, _, report, claim) = job.destination();
     check_set(&dir, &job.output_names(), &report, &claim)?;
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
-    let read = crate::io::msh::parse_to_curve(&bytes)?;
+    let read = crate::io::msh::parse_any(&bytes, true)?;
     drop(bytes);
     unkept(&read.layout).map_err(|why| RunError::Unkept { path: job.input.clone(), why })?;
     check_memory(&read.mesh, job)?;
@@ -958,7 +958,24 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
             _ => curve_plane(mesh, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, 1)),
         },
     };
-    result.map_err(|e| with_node_tag(e, &read.node_tags))
+    result.map_err(|e| in_the_files_tags(with_node_tag(e, &read.node_tags), &job.input))
+}
+
+/// A refusal of the mesh's structure by Algorithm 2's subdivision (0-based
+/// indices) told again by [`crate::io::msh::check_structure`]: the
+/// file's element and node tags and the cause (a hanging node, duplicate
+/// nodes, …). The file is read again only then.
+fn in_the_files_tags(e: RunError, input: &Path) -> RunError {
+    use crate::refine::SubdivideError;
+    match e {
+        RunError::Curve(CurveError::Subdivide(SubdivideError::NotACellFacet { .. } | SubdivideError::InteriorFacet { .. } | SubdivideError::Uncovered { .. })) => {
+            match std::fs::read(input).map(|bytes| crate::io::msh::check_structure(&bytes)) {
+                Ok(Err(told)) => told.into(),
+                _ => e,
+            }
+        }
+        e => e,
+    }
 }
 
 /// Refuses a `curve` run whose estimated peak memory

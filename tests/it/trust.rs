@@ -316,13 +316,85 @@ fn a_run_whose_estimate_exceeds_the_memory_limit_is_refused_at_once() {
     let dir = box_folder(100);
     let (code, stderr, took) = curve_limited(dir.path(), 400, 4, "--band all");
     assert_eq!(code, Some(4), "{stderr}");
-    for needle in ["this run needs about", "estimated for 163216 nodes of order 4 in 2D, --band all", "the address-space limit (RLIMIT_AS, `ulimit -v`) of 400 MiB", "nothing was computed or written", "At --order 2 it needs about"] {
+    for needle in ["this run needs about", "estimated for 163216 nodes of order 4 in 2D, --band all", "the address-space limit (RLIMIT_AS, `ulimit -v`) of 400 MiB", "nothing was computed or written", "At --order 3 it needs about"] {
         assert!(stderr.contains(needle), "stderr lacks `{needle}`:\n{stderr}");
     }
     assert!(took.as_secs_f64() < 5.0, "refused after {took:?}");
     assert_eq!(files_in(dir.path()), ["box.msh", "geo.toml"], "nothing written");
     // the order it advises fits under the same limit, and runs
-    let (code, stderr, _) = curve_limited(dir.path(), 400, 2, "--band all");
+    let (code, stderr, _) = curve_limited(dir.path(), 400, 3, "--band all");
     assert_eq!(code, Some(0), "{stderr}");
     assert!(dir.path().join("d/b.msh").exists());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn an_allocation_that_fails_is_a_message_and_exit_code_4_not_an_abort() {
+    // the benchmark's 5000² cells need far more than 400 MiB, and it
+    // estimates nothing: its first large allocation fails
+    let dir = TempDir::new().unwrap();
+    let script = format!("ulimit -v {}; exec '{}' bench --sizes 5000 --repeat 1", 400 * 1024, env!("CARGO_BIN_EXE_deformesh"));
+    let out = Command::new("sh").args(["-c", &script]).current_dir(dir.path()).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("error: out of memory: an allocation of") && stderr.contains("failed under the address-space limit (RLIMIT_AS, `ulimit -v`) of 400 MiB; nothing was written"), "{stderr}");
+    assert_eq!(files_in(dir.path()), Vec::<String>::new());
+}
+
+// ------------------------------------------------------------ small items
+
+#[test]
+fn an_upper_case_output_a_compressed_input_and_mixed_orders_are_said_clearly() {
+    let dir = cylinder_folder();
+    let p = dir.path();
+    // `.MSH` is MSH 4.1, as `.msh`
+    let ran = curve(p, "in.msh", "UP.MSH", &[]);
+    ok(&ran, "-o UP.MSH");
+    assert!(read(&p.join("UP.MSH")).starts_with(b"$MeshFormat\n4.1"));
+    // a gzip file is named as one
+    let mut gz = vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 3];
+    gz.extend_from_slice(&[0u8; 20]);
+    std::fs::write(p.join("in.msh.gz"), &gz).unwrap();
+    for args in [vec!["quality", "in.msh.gz"], vec!["curve", "in.msh.gz", "--geometry", "geo.toml", "-o", "gz.msh"]] {
+        let ran = deformesh(p, &args);
+        assert_eq!(ran.code, Some(1), "{}", ran.stderr);
+        assert!(ran.stderr.contains("in.msh.gz: the file is gzip-compressed, not an MSH file: decompress it first (e.g. `gunzip FILE`)"), "{}", ran.stderr);
+    }
+    // linear quads bounded by lines of order 2: one order per mesh, said so
+    let mixed = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 5 1 5\n2 1 0 5\n1\n2\n3\n4\n5\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0 0\n$EndNodes\n$Elements\n2 2 1 2\n2 1 3 1\n1 1 2 3 4\n1 1 8 1\n2 1 2 5\n$EndElements\n";
+    std::fs::write(p.join("mixed.msh"), mixed).unwrap();
+    let ran = deformesh(p, &["quality", "mixed.msh"]);
+    assert_eq!(ran.code, Some(1), "{}", ran.stderr);
+    assert!(ran.stderr.contains("mixed.msh: line 22: an element block of order 2 in a mesh whose first cell is of order 1"), "{}", ran.stderr);
+    assert!(!ran.stderr.contains("only linear meshes"), "{}", ran.stderr);
+}
+
+#[test]
+fn cad_models_are_named_read_whatever_the_case_of_their_extension_and_an_empty_library_path_is_said() {
+    let dir = TempDir::new().unwrap();
+    let p = dir.path();
+    let (step, mesh) = (p.join("disk.step"), p.join("disk.msh"));
+    crate::common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("disk"), step.as_os_str(), mesh.as_os_str()]);
+    let lib = crate::common::gmsh_lib();
+    let with_lib = |lib: &std::ffi::OsStr, model: &str, out: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_deformesh")).args(["curve", "disk.msh", "--cad", model, "--order", "2", "-o", out]).current_dir(p).env("DEFORMESH_GMSH_LIB", lib).env_remove("RUST_LOG").output().unwrap();
+        Ran { code: out.status.code(), stdout: String::from_utf8_lossy(&out.stdout).into_owned(), stderr: String::from_utf8_lossy(&out.stderr).into_owned() }
+    };
+    // `.Stp` is read as STEP (Gmsh alone would read it as a .geo script)
+    std::fs::copy(&step, p.join("Disk.Stp")).unwrap();
+    let ran = with_lib(lib.as_os_str(), "Disk.Stp", "a.msh");
+    ok(&ran, "Disk.Stp");
+    assert!(!ran.stdout.contains('\x1b'), "terminal codes on stdout:\n{}", ran.stdout);
+    // a model Gmsh cannot read: the message starts with the model's file
+    std::fs::write(p.join("bad.step"), "ISO-10303-21;\nnot a model\n").unwrap();
+    let ran = with_lib(lib.as_os_str(), "bad.step", "b.msh");
+    assert_eq!(ran.code, Some(1), "{}", ran.stderr);
+    assert!(ran.stderr.contains("\nerror: bad.step: Gmsh's gmshMerge failed") || ran.stderr.starts_with("error: bad.step: Gmsh's gmshMerge failed"), "{}", ran.stderr);
+    // OpenCASCADE's diagnostics (with terminal colour codes) go to stderr
+    assert_eq!(ran.stdout, "", "stdout is the user's");
+    assert!(!p.join("b.msh").exists());
+    // an empty DEFORMESH_GMSH_LIB is said as such (it loaded the program itself)
+    let ran = with_lib(std::ffi::OsStr::new(""), "disk.step", "c.msh");
+    assert_eq!(ran.code, Some(69), "{}", ran.stderr);
+    assert!(ran.stderr.contains("DEFORMESH_GMSH_LIB is set but empty") && !ran.stderr.contains("gmshFree"), "{}", ran.stderr);
 }

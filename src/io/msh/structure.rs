@@ -300,7 +300,7 @@ fn orientation(q: &[usize], f: &[usize]) -> Option<bool> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::parse_to_curve;
+    use super::super::check_structure;
     use super::super::MshError;
 
     /// Tetrahedra on the nodes 1 (0,0,0), 2 (1,0,0), 3 (0,1,0), 4
@@ -323,18 +323,18 @@ mod tests {
         // tet 101 below z = 0; tets 102 and 103 above, their bottoms
         // halving 101's top face at node 5
         let outer = [[1, 2, 4], [1, 3, 4], [2, 3, 4], [1, 5, 6], [1, 3, 6], [5, 2, 6], [2, 3, 6]];
-        let e = parse_to_curve(tets(&[[1, 2, 3, 4], [1, 5, 3, 6], [5, 2, 3, 6]], &outer).as_bytes()).unwrap_err();
+        let e = check_structure(tets(&[[1, 2, 3, 4], [1, 5, 3, 6], [5, 2, 3, 6]], &outer).as_bytes()).unwrap_err();
         assert!(matches!(e, MshError::Structure(_)), "{e}");
         let e = e.to_string();
         assert!(e.contains("node 5 is a hanging node") && e.contains("face with nodes") && e.contains("of element 101, a corner of elements 102, 103"), "{e}");
         // one tet above, sharing 101's whole top face: conforming
         let outer = [[1, 2, 4], [1, 3, 4], [2, 3, 4], [1, 2, 6], [1, 3, 6], [2, 3, 6]];
-        parse_to_curve(tets(&[[1, 2, 3, 4], [1, 2, 3, 6]], &outer).as_bytes()).unwrap();
+        check_structure(tets(&[[1, 2, 3, 4], [1, 2, 3, 6]], &outer).as_bytes()).unwrap();
         // a face missing, and a face in the middle
-        let e = parse_to_curve(tets(&[[1, 2, 3, 4], [1, 2, 3, 6]], &outer[1..]).as_bytes()).unwrap_err().to_string();
+        let e = check_structure(tets(&[[1, 2, 3, 4], [1, 2, 3, 6]], &outer[1..]).as_bytes()).unwrap_err().to_string();
         assert!(e.contains("1 face(s) on the boundary of the mesh are in no boundary element (the first: the face of element 101 with nodes") && e.contains("Mesh.SaveAll"), "{e}");
         let inner = [[1, 2, 4], [1, 3, 4], [2, 3, 4], [1, 2, 6], [1, 3, 6], [2, 3, 6], [3, 2, 1]];
-        let e = parse_to_curve(tets(&[[1, 2, 3, 4], [1, 2, 3, 6]], &inner).as_bytes()).unwrap_err().to_string();
+        let e = check_structure(tets(&[[1, 2, 3, 4], [1, 2, 3, 6]], &inner).as_bytes()).unwrap_err().to_string();
         assert!(e.contains("boundary element 7 (nodes 3 2 1) lies inside the mesh, between elements 101 and 102"), "{e}");
     }
 }
