@@ -81,11 +81,13 @@ fn out_of_memory(size: usize) -> ! {
     {
         let mut r = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
         // SAFETY: getrlimit writes the struct it is given
+        // rlim_t is not u64 on every Unix
+        #[allow(clippy::unnecessary_cast)]
         if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0 && r.rlim_cur != libc::RLIM_INFINITY {
             let _ = write!(text, " under the address-space limit (RLIMIT_AS, `ulimit -v`) of {:.0} MiB", mib(r.rlim_cur as u64));
         }
     }
-    let _ = write!(text, "; nothing was written. Ask for less (a lower --order, a coarser mesh, Algorithm 2 in its band rather than --band all) or run where more memory is available\n");
+    let _ = writeln!(text, "; nothing was written. Ask for less (a lower --order, a coarser mesh, Algorithm 2 in its band rather than --band all) or run where more memory is available");
     #[cfg(unix)]
     // SAFETY: write and _exit are async-signal-safe and allocate nothing
     unsafe {

@@ -52,6 +52,8 @@ pub fn headroom() -> Option<Headroom> {
     {
         let mut r = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
         // SAFETY: getrlimit writes the struct it is given
+        // rlim_t is not u64 on every Unix
+        #[allow(clippy::unnecessary_cast)]
         if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0 && r.rlim_cur != libc::RLIM_INFINITY {
             let used = kb_field(&status, "VmSize:").unwrap_or(0);
             all.push(Headroom { bytes: (r.rlim_cur as u64).saturating_sub(used), what: format!("the address-space limit (RLIMIT_AS, `ulimit -v`) of {}", shown(r.rlim_cur as u64)) });
