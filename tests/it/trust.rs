@@ -398,3 +398,30 @@ fn cad_models_are_named_read_whatever_the_case_of_their_extension_and_an_empty_l
     assert_eq!(ran.code, Some(69), "{}", ran.stderr);
     assert!(ran.stderr.contains("DEFORMESH_GMSH_LIB is set but empty") && !ran.stderr.contains("gmshFree"), "{}", ran.stderr);
 }
+
+#[cfg(unix)]
+#[test]
+fn sigterm_and_sigint_are_said_on_stderr_and_leave_nothing() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = box_folder(150);
+    for sig in [libc::SIGTERM, libc::SIGINT] {
+        // about 2 s of work at order 4 without the snap: signalled early
+        let child = Command::new(env!("CARGO_BIN_EXE_deformesh"))
+            .args(["curve", "box.msh", "--geometry", "geo.toml", "--order", "4", "--snap", "never", "-o", "d/b.msh"])
+            .current_dir(dir.path())
+            .env_remove("RUST_LOG")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        // SAFETY: signalling our own child process
+        assert_eq!(unsafe { libc::kill(child.id() as i32, sig) }, 0);
+        let done = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&done.stderr);
+        assert_eq!(done.status.signal(), Some(sig), "{stderr}");
+        let name = if sig == libc::SIGTERM { "terminated (SIGTERM)" } else { "interrupted (SIGINT)" };
+        assert!(stderr.contains(&format!("deformesh: {name}: the outputs are written whole or not at all")), "{stderr}");
+        assert_eq!(files_in(dir.path()), ["box.msh", "geo.toml"], "nothing written");
+    }
+}
