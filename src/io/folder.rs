@@ -165,6 +165,9 @@ enum Ledger {
     /// A report of ours: the files it records as written (none in a
     /// report of a version that recorded no hashes).
     Ours(Vec<Written>),
+    /// A report of ours from a version that recorded no sizes and
+    /// hashes: none of its files can be told to be as it wrote them.
+    Unrecorded,
     /// A file of the report's name that is not a report of ours.
     Foreign,
 }
@@ -184,7 +187,9 @@ fn ledger(dir: &Path, report: &str) -> Ledger {
         return Ledger::Foreign;
     }
     let plain = |n: &str| !n.is_empty() && !n.starts_with('.') && !n.contains(['/', '\\']) && n != report;
-    let written = value.get("written").and_then(|w| w.as_array()).map_or(&[][..], |w| w.as_slice());
+    let Some(written) = value.get("written").and_then(|w| w.as_array()) else {
+        return Ledger::Unrecorded;
+    };
     Ledger::Ours(written.iter().filter_map(|w| serde_json::from_value::<Written>(w.clone()).ok()).filter(|w| plain(&w.file)).collect())
 }
 
@@ -225,13 +230,14 @@ pub fn check_set(dir: &Path, names: &[String], report: &str, claim: &Claim) -> R
             continue;
         }
         let why = match &ledger {
-            Ledger::Ours(_) if name == report => continue,
+            Ledger::Ours(_) | Ledger::Unrecorded if name == report => continue,
             Ledger::Ours(written) => match written.iter().find(|w| &w.file == name) {
                 Some(w) if w.still_in(dir) => continue,
                 Some(_) => format!("changed since deformesh wrote it (its size or bytes differ from what `{report}` recorded)"),
                 None => format!("was not written by deformesh (`{report}` does not record it)"),
             },
             Ledger::Absent => format!("was not written by deformesh (no report `{report}` records it)"),
+            Ledger::Unrecorded => format!("cannot be told to be as deformesh wrote it (`{report}` is from a version that recorded no sizes and hashes: --force replaces it once)"),
             Ledger::Foreign if name == report => "is not a report of deformesh".to_string(),
             Ledger::Foreign => format!("was not written by deformesh (`{report}` is not a report of deformesh)"),
         };
@@ -283,7 +289,7 @@ fn check_writable(folder: &Path, dir: &Path) -> Result<(), FolderError> {
 /// holds a report of an earlier run; anything else might be a user's files,
 /// which a rerun must neither mix with nor delete.
 fn check_ours(dir: &Path, report: &str) -> Result<(), FolderError> {
-    if matches!(ledger(dir, report), Ledger::Ours(_)) {
+    if matches!(ledger(dir, report), Ledger::Ours(_) | Ledger::Unrecorded) {
         return Ok(());
     }
     let names = fs::read_dir(dir).map_err(io_at(dir))?;
@@ -601,6 +607,23 @@ mod tests {
         assert!(e.contains("report.json") && e.contains("is not a report of deformesh"), "{e}");
         assert_eq!(names(out), ["report.json"]);
         check_set(out, &["c.msh".into()], "report.json", &claim("c.msh")).unwrap();
+    }
+
+    #[test]
+    fn a_report_without_records_makes_its_files_unknown() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path();
+        fs::write(out.join("mesh.msh"), "old").unwrap();
+        fs::write(out.join("frame.png"), "old").unwrap();
+        fs::write(out.join("report.json"), r#"{"outputs": ["mesh.msh", "frame.png", "report.json"]}"#).unwrap();
+        check_run_folder(out, "report.json", false).unwrap();
+        let e = write(out, &["mesh.msh"], "mesh.msh").unwrap_err().to_string();
+        assert!(e.contains("mesh.msh") && e.contains("from a version that recorded no sizes and hashes"), "{e}");
+        let (files, report) = set(&["mesh.msh"]);
+        write_set(out, &files, "report.json", report, &Claim { force: true, ..claim("mesh.msh") }).unwrap();
+        // forced over, and the old frame kept: nothing says it is ours
+        assert_eq!(names(out), ["frame.png", "mesh.msh", "report.json"]);
+        write(out, &["mesh.msh"], "mesh.msh").unwrap();
     }
 
     #[test]
