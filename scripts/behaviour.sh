@@ -13,7 +13,7 @@
 # Figures compared: every number, string and list in report.json except
 # what depends on the machine or on an iterative solver's convergence:
 # times (`time`, every `*_s`), peak memory (`peak_memory_mib`), iteration counts (`iterations_*`),
-# multigrid rebuilds (`hierarchy_builds`), file names (`outputs`, `input`) and the
+# multigrid rebuilds (`hierarchy_builds`), file names (`outputs`, `input`; `written`, the files' sizes and hashes) and the
 # prose `definitions`. So: cells, nodes, unknowns, steps, halved steps,
 # solves, the solver chosen, det J and scaled-Jacobian ranges, invalid
 # cells, cell sizes, J/f min/max/L2/CoV, boundary distances, the
@@ -120,7 +120,7 @@ import json, math, os, sys
 mode, name, status, report, recorded, command = sys.argv[1:7]
 RTOL = float(os.environ.get("BEHAVIOUR_RTOL", "1e-6"))
 ATOL = float(os.environ.get("BEHAVIOUR_ATOL", "1e-12"))
-SKIP = {"time", "outputs", "definitions", "hierarchy_builds", "input", "peak_memory_mib"}
+SKIP = {"time", "outputs", "written", "definitions", "hierarchy_builds", "input", "peak_memory_mib"}
 
 def skipped(key):
     return key in SKIP or key.endswith("_s") or key.startswith("iterations")

@@ -6,13 +6,97 @@ use clap::{Parser, Subcommand};
 use deformesh::app::case::{Case, DEMO_CASE};
 use deformesh::app::case::AnySetup;
 use deformesh::deform::SolverChoice;
-use deformesh::app::driver::{exit, run_any, OutputFormat, Progress, RunError, REPORT};
+use deformesh::app::driver::{exit, run_any_with, OutputFormat, Progress, RunError, REPORT};
 use deformesh::io::folder::check_run_folder;
 use deformesh::highorder::curve::{certify_mesh, CurvedQuality};
 use deformesh::io::msh::MshError;
 use indicatif::{ProgressBar, ProgressStyle};
+use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+
+/// The system's allocator, except that an allocation that fails ends the
+/// run with a message and [`exit::MEMORY`] instead of an abort. Outputs
+/// are renamed into place only at the end, so nothing is half-written.
+struct Allocator;
+
+#[global_allocator]
+static ALLOCATOR: Allocator = Allocator;
+
+// SAFETY: every call is the system allocator's, with the same arguments
+unsafe impl GlobalAlloc for Allocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if p.is_null() {
+            out_of_memory(layout.size());
+        }
+        p
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if p.is_null() {
+            out_of_memory(layout.size());
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if p.is_null() {
+            out_of_memory(new_size);
+        }
+        p
+    }
+}
+
+/// Text written into a buffer on the stack: the out-of-memory message
+/// must not allocate.
+struct StackText {
+    buf: [u8; 768],
+    len: usize,
+}
+
+impl std::fmt::Write for StackText {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        let n = s.len().min(self.buf.len() - self.len);
+        self.buf[self.len..self.len + n].copy_from_slice(&s.as_bytes()[..n]);
+        self.len += n;
+        Ok(())
+    }
+}
+
+/// Says that an allocation of `size` bytes failed, and under which limit,
+/// and ends the process with [`exit::MEMORY`] (no allocation, no unwinding).
+fn out_of_memory(size: usize) -> ! {
+    use std::fmt::Write;
+    let mut text = StackText { buf: [0; 768], len: 0 };
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    let _ = write!(text, "\nerror: out of memory: an allocation of {:.0} MiB failed", mib(size as u64));
+    #[cfg(unix)]
+    {
+        let mut r = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+        // SAFETY: getrlimit writes the struct it is given
+        // rlim_t is not u64 on every Unix
+        #[allow(clippy::unnecessary_cast)]
+        if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0 && r.rlim_cur != libc::RLIM_INFINITY {
+            let _ = write!(text, " under the address-space limit (RLIMIT_AS, `ulimit -v`) of {:.0} MiB", mib(r.rlim_cur as u64));
+        }
+    }
+    let _ = writeln!(text, "; nothing was written. Ask for less (a lower --order, a coarser mesh, Algorithm 2 in its band rather than --band all) or run where more memory is available");
+    #[cfg(unix)]
+    // SAFETY: write and _exit are async-signal-safe and allocate nothing
+    unsafe {
+        libc::write(2, text.buf.as_ptr().cast(), text.len);
+        libc::_exit(exit::MEMORY);
+    }
+    #[cfg(not(unix))]
+    std::process::abort()
+}
 
 #[derive(Parser)]
 #[command(
@@ -21,9 +105,12 @@ use std::path::{Path, PathBuf};
     about = "Curved, boundary-conforming meshes of every element kind (triangles, quads, tetrahedra, hexes, prisms, pyramids, mixed) by the deformation method",
     after_help = "Exit codes: 0 success; 1 bad input (the message names the file, line, field or element); \
                   2 the mesh is or would be invalid (the elements are named, nothing is written); \
-                  3 a linear solver failed (not the input's fault; nothing is written); \
-                  64 a usage error (an unknown option, a missing or malformed argument); \
-                  69 a library the command needs is absent (Gmsh's, for --cad); 130 interrupted (Ctrl-C)."
+                  3 a linear solver failed (not the input's fault), or no result of curve was certified valid (the snap, its patches and the whole mesh all ended without one; the runs' reasons are said; nothing is written); \
+                  4 the run needs more memory than it may have (the estimate and what would fit are said; nothing is written); \
+                  64 a usage error (an unknown option, a missing or malformed argument, an output that is an input); \
+                  69 a library the command needs is absent (Gmsh's, for --cad); \
+                  73 an output would replace a file no run of deformesh wrote (--force replaces it; nothing is written); \
+                  74 writing the outputs failed (a full disk, an I/O error; nothing is written); 130 interrupted (Ctrl-C)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -39,12 +126,21 @@ enum Command {
         /// Output folder (default: out/<case name>).
         #[arg(short, long)]
         out: Option<PathBuf>,
+        /// Replace files of the outputs' names that no run of deformesh
+        /// wrote (or that changed since), and write into a folder that is
+        /// not an earlier run's.
+        #[arg(long)]
+        force: bool,
     },
     /// Run the built-in case: the unit square onto a quarter disk (the seed's Figure 2).
     Demo {
         /// Output folder.
         #[arg(short, long, default_value = "out/demo")]
         out: PathBuf,
+        /// Replace files of the outputs' names that no run of deformesh
+        /// wrote (or that changed since).
+        #[arg(long)]
+        force: bool,
     },
     /// Curve a user's linear mesh: bind its boundary to exact shapes (the
     /// CAD model it was meshed from, or a geometry file), run Algorithms 2
@@ -110,6 +206,11 @@ enum Command {
         /// (Gmsh MSH 2.2, `.msh`), mfem or abaqus.
         #[arg(long)]
         format: Option<String>,
+        /// Replace an existing OUT file (or its .vtu, .png, .report.json)
+        /// that no run of deformesh wrote, or that changed since (never an
+        /// input).
+        #[arg(long)]
+        force: bool,
     },
     /// Print quality figures of a triangle, quad, tetrahedral or hex mesh (linear or high order) in Gmsh MSH format.
     Quality {
@@ -188,21 +289,21 @@ fn usage(ok: bool, message: impl FnOnce() -> String) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Run { case, out } => {
+        Command::Run { case, out, force } => {
             let parsed = Case::read(&case)?;
             let base = case.parent().unwrap_or(Path::new("."));
             let setup = parsed.setup_any(&case.display().to_string(), base)?;
             let name = setup.name().to_string();
             let out = out.unwrap_or_else(|| Path::new("out").join(folder_name(&name)));
-            check_run_folder(&out, REPORT)?;
-            run_and_print(setup, &out, &case.display().to_string())
+            check_run_folder(&out, REPORT, force).map_err(RunError::from)?;
+            run_and_print(setup, (&out, force), &case.display().to_string())
         }
-        Command::Demo { out } => {
-            check_run_folder(&out, REPORT)?;
+        Command::Demo { out, force } => {
+            check_run_folder(&out, REPORT, force).map_err(RunError::from)?;
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
-            run_and_print(setup, &out, "<built-in demo>")
+            run_and_print(setup, (&out, force), "<built-in demo>")
         }
-        Command::Curve { mesh, cad, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, snap, out, format } => {
+        Command::Curve { mesh, cad, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, snap, out, format, force } => {
             usage(shape_tolerance.is_finite() && shape_tolerance > 0.0, || format!("--shape-tolerance must be a positive number, got {shape_tolerance}"))?;
             deformesh::highorder::check_order(order).map_err(|e| Usage(format!("--order: {e}")))?;
             usage(steps != Some(0), || "--steps must be at least 1".into())?;
@@ -231,11 +332,12 @@ fn run(cli: Cli) -> Result<()> {
             usage(!same_file(&mesh, &out), || format!("-o `{}` is the input mesh: the curved mesh must go to another file", out.display()))?;
             let flow = deformesh::deform::DeformOptions { solver, ..Default::default() };
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, band, snap_first, ..Default::default() };
-            deformesh::io::folder::check_output_file(&out)?;
+            deformesh::io::folder::check_output_file(&out).map_err(RunError::from)?;
+            let cad_file = cad.clone();
             let cad = cad.map(|model| deformesh::app::driver::CadSource { model, library: None });
-            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, cad, output: out.clone(), format, options, width: 900 };
+            let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, cad, output: out.clone(), format, options, width: 900, force };
             let bar = Bar::new();
-            let r = deformesh::app::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame(e, &mesh.display().to_string()));
+            let r = deformesh::app::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame_cad(e, &mesh.display().to_string(), cad_file.as_deref()));
             bar.finish();
             let r = r?;
             if r.reoriented_cells > 0 {
@@ -349,9 +451,22 @@ fn blame(e: RunError, input: &str) -> anyhow::Error {
     }
 }
 
-fn run_and_print(setup: AnySetup, out: &Path, input: &str) -> Result<()> {
+/// [`blame`] for `curve`: an error of the CAD model is prefixed by the
+/// model's file (Gmsh's library missing, by nothing).
+fn blame_cad(e: RunError, input: &str, cad: Option<&Path>) -> anyhow::Error {
+    use deformesh::geometry::cad::CadError;
+    match (e, cad) {
+        // these name their own file, or none
+        (e @ RunError::Cad(CadError::Absent { .. } | CadError::Library { .. } | CadError::Extension { .. }), _) => e.into(),
+        (RunError::Read { path, cause }, Some(model)) if path == model => RunError::Read { path, cause }.into(),
+        (e @ RunError::Cad(_), Some(model)) => anyhow::Error::from(e).context(model.display().to_string()),
+        (e, _) => blame(e, input),
+    }
+}
+
+fn run_and_print(setup: AnySetup, (out, force): (&Path, bool), input: &str) -> Result<()> {
     let bar = Bar::new();
-    let report = run_any(setup, out, |p| bar.update(p)).map_err(|e| blame(e, input));
+    let report = run_any_with(setup, out, force, |p| bar.update(p)).map_err(|e| blame(e, input));
     bar.finish();
     let report = report?;
     println!("case {}: {} cells, {} nodes, {} steps ({} halved)", report.case, report.cells, report.nodes, report.steps, report.halved_steps);

@@ -13,7 +13,7 @@ use crate::highorder::Spacing;
 use crate::mesh::CurvedMesh;
 use crate::io::msh::{hex_msh_string, msh_string, AnyMesh, MshError};
 use crate::io::vtu::{hex_vtu_string, vtu_string, VtuError};
-use crate::io::folder::{check_output_file, check_run_folder, write_set, FolderError};
+use crate::io::folder::{check_output_file, check_run_folder, check_set, write_set, Claim, FolderError};
 use crate::mesh::{polygon_area, PlaneMesh, Point2, Point3, SolidMesh};
 use crate::quality::{jf_stats, mesh_quality, scaled_jacobian, JfStats, MeshQuality, Range};
 use crate::render::{ColourMap, gif_bytes, png_bytes, render_hexes, render_quads, Camera, ClipPlane, RenderError, RenderOptions, RenderOptions3};
@@ -112,6 +112,19 @@ pub enum RunError {
     /// The CAD model cannot be read, or Gmsh's library is absent.
     #[error(transparent)]
     Cad(#[from] crate::geometry::cad::CadError),
+    /// The run needs more memory than the process may have: refused
+    /// before anything is computed.
+    #[error("this run needs about {} of memory ({what}), more than {} leaves ({} free): nothing was computed or written. {advice}", crate::app::memory::shown(*need), room.what, crate::app::memory::shown(room.bytes))]
+    Memory {
+        /// The estimate.
+        need: u64,
+        /// What it was estimated for.
+        what: String,
+        /// What the process may allocate.
+        room: crate::app::memory::Headroom,
+        /// What would fit.
+        advice: String,
+    },
     /// The input holds what `curve` cannot carry to its output (the CLI
     /// names the file).
     #[error("{why}")]
@@ -139,6 +152,17 @@ pub mod exit {
     /// A library the command needs is absent (Gmsh's, for `--cad`):
     /// BSD's EX_UNAVAILABLE.
     pub const UNAVAILABLE: i32 = 69;
+    /// The run needs more memory than it may have (the estimate, said
+    /// before computing, or an allocation that failed): nothing is written.
+    pub const MEMORY: i32 = 4;
+    /// An output would replace a file that no run of this tool wrote (or
+    /// that changed since): nothing is written; `--force` replaces it.
+    /// BSD's EX_CANTCREAT.
+    pub const NOT_OURS: i32 = 73;
+    /// Writing the outputs failed in the file system (a full disk, a
+    /// quota, an I/O error): nothing is written, nothing staged is left.
+    /// BSD's EX_IOERR.
+    pub const WRITE: i32 = 74;
     /// The command line itself is wrong (unknown option, missing or
     /// unparsable argument): BSD's EX_USAGE.
     pub const USAGE: i32 = 64;
@@ -161,6 +185,10 @@ impl RunError {
             | RunError::Curve(CurveError::Deform(DeformError::Solve(_) | DeformError::Stalled { .. }) | CurveError::NoCandidate { .. })
             | RunError::Unrepaired { .. } => exit::SOLVER,
             RunError::Cad(crate::geometry::cad::CadError::Absent { .. } | crate::geometry::cad::CadError::Library { .. }) => exit::UNAVAILABLE,
+            RunError::Memory { .. } => exit::MEMORY,
+            RunError::Folder(FolderError::NotWritten { .. }) => exit::NOT_OURS,
+            RunError::Folder(FolderError::IsInput { .. }) => exit::USAGE,
+            RunError::Folder(f) if f.is_write_failure() => exit::WRITE,
             _ => exit::BAD_INPUT,
         }
     }
@@ -243,7 +271,10 @@ pub struct Report {
     pub highorder: Option<HighOrderReport>,
     /// Seconds.
     pub time: Timings,
-    /// Files written.
+    /// Files written. The report file also records each one's size and
+    /// FNV-1a hash (`written`, with the files of other outputs in the
+    /// folder still as an earlier run wrote them): a rerun replaces or
+    /// removes only those ([`crate::io::folder`]).
     pub outputs: Vec<String>,
 }
 
@@ -478,24 +509,58 @@ pub const REPORT: &str = "report.json";
 
 /// Runs a prepared 2D or 3D case; writes into `out_dir` only on success.
 pub fn run_any(setup: AnySetup, out_dir: &Path, progress: impl FnMut(Progress)) -> Result<Report, RunError> {
+    run_any_with(setup, out_dir, false, progress)
+}
+
+/// [`run_any`], with `force` (`--force`): files in `out_dir` of the
+/// outputs' names that no run of ours wrote are replaced.
+pub fn run_any_with(setup: AnySetup, out_dir: &Path, force: bool, progress: impl FnMut(Progress)) -> Result<Report, RunError> {
     match setup {
-        AnySetup::Quad(s) => run_setup(s, out_dir, progress),
-        AnySetup::Tri(s) => run_setup(s, out_dir, progress),
-        AnySetup::Hex(s) => run_setup(s, out_dir, progress),
-        AnySetup::Tet(s) => run_setup(s, out_dir, progress),
-        AnySetup::Cut(s) => run_setup(s, out_dir, progress),
-        AnySetup::CutPlane(s) => run_setup(s, out_dir, progress),
+        AnySetup::Quad(s) => run_setup_with(s, out_dir, force, progress),
+        AnySetup::Tri(s) => run_setup_with(s, out_dir, force, progress),
+        AnySetup::Hex(s) => run_setup_with(s, out_dir, force, progress),
+        AnySetup::Tet(s) => run_setup_with(s, out_dir, force, progress),
+        AnySetup::Cut(s) => run_setup_with(s, out_dir, force, progress),
+        AnySetup::CutPlane(s) => run_setup_with(s, out_dir, force, progress),
     }
 }
 
+/// The files a run with `output` (and high order or not) may write into
+/// its folder, its report last: checked before computing.
+fn run_names(output: &OutputSpec, highorder: bool) -> Vec<String> {
+    let mut names: Vec<String> = ["mesh.msh", "mesh.vtu", "mesh.png"].map(String::from).to_vec();
+    if highorder {
+        names.extend(["linear.msh", "linear.vtu", "linear.png"].map(String::from));
+    }
+    names.extend(output.frames.iter().map(|t| format!("frame_t{t:.2}.png")));
+    if output.animation {
+        names.push("deformation.gif".into());
+    }
+    names.push(REPORT.into());
+    names
+}
+
+/// The claim of `run` on its folder: one output (`mesh.msh`), replacing
+/// what an earlier run wrote.
+fn run_claim(force: bool) -> Claim {
+    Claim { output: "mesh.msh".into(), inputs: Vec::new(), force }
+}
+
 /// Runs a prepared case; writes into `out_dir` only on success.
-pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
+pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(setup: Setup<M, D>, out_dir: &Path, progress: impl FnMut(Progress)) -> Result<Report, RunError> {
+    run_setup_with(setup, out_dir, false, progress)
+}
+
+/// [`run_setup`], with `force`: over files no run of ours wrote.
+pub fn run_setup_with<M: Outputs<D, N>, const D: usize, const N: usize>(
     setup: Setup<M, D>,
     out_dir: &Path,
+    force: bool,
     mut progress: impl FnMut(Progress),
 ) -> Result<Report, RunError> {
     let clock = Instant::now();
-    check_run_folder(out_dir, REPORT)?;
+    check_run_folder(out_dir, REPORT, force)?;
+    check_set(out_dir, &run_names(&setup.output, setup.highorder.is_some()), REPORT, &run_claim(force))?;
     let Setup { name, mesh, parts, field, options, output, highorder } = setup;
     let nominal_steps = options.steps;
     let integrator = options.integrator;
@@ -636,9 +701,7 @@ pub fn run_setup<M: Outputs<D, N>, const D: usize, const N: usize>(
     };
     report.time.total_s = clock.elapsed().as_secs_f64();
     report.time.peak_memory_mib = super::bench::peak_memory_mib();
-    let json = serde_json::to_string_pretty(&report).expect("report serialises");
-    files.push((REPORT.into(), json.into_bytes()));
-    write_set(out_dir, &files, REPORT)?;
+    write_set(out_dir, &files, REPORT, serde_json::to_value(&report).expect("report serialises"), &run_claim(force))?;
     Ok(report)
 }
 
@@ -687,6 +750,32 @@ pub struct CurveJob {
     pub options: CurveOptions,
     /// Picture width in pixels.
     pub width: u32,
+    /// `--force`: files of the outputs' names that no run of ours wrote
+    /// are replaced (never an input).
+    pub force: bool,
+}
+
+impl CurveJob {
+    /// The folder of the outputs, their stem, the report's name, and the
+    /// claim on the folder: the output is the main file's name; the
+    /// input mesh, the geometry file and the CAD model are never replaced.
+    fn destination(&self) -> (PathBuf, String, String, Claim) {
+        let stem = self.output.file_stem().map_or("curved".into(), |s| s.to_string_lossy().into_owned());
+        let dir = self.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
+        let name = self.output.file_name().map_or_else(|| format!("{stem}.{}", self.format.extension()), |n| n.to_string_lossy().into_owned());
+        let mut inputs = vec![(self.input.clone(), "the input mesh".to_string())];
+        inputs.extend(self.geometry.iter().map(|g| (g.clone(), "the geometry file".to_string())));
+        inputs.extend(self.cad.iter().map(|c| (c.model.clone(), "the CAD model".to_string())));
+        let report = format!("{stem}.report.json");
+        (dir, stem, report, Claim { output: name, inputs, force: self.force })
+    }
+
+    /// Every file the outputs may be (the VTU is left out for curved
+    /// pyramids), the report last.
+    fn output_names(&self) -> Vec<String> {
+        let (_, stem, report, claim) = self.destination();
+        vec![claim.output, format!("{stem}.vtu"), format!("{stem}.png"), report]
+    }
 }
 
 /// Where `curve --cad` finds its model and Gmsh.
@@ -741,7 +830,7 @@ impl OutputFormat {
     /// MFEM, `.inp` ABAQUS. Anything else is refused, naming the choices.
     pub fn choose(output: &Path, flag: Option<&str>) -> Result<OutputFormat, String> {
         let ext = output.extension().and_then(|e| e.to_str()).unwrap_or("");
-        let by_ext = match ext {
+        let by_ext = match ext.to_ascii_lowercase().as_str() {
             "msh" => Some(OutputFormat::Msh41),
             "mesh" => Some(OutputFormat::Mfem),
             "inp" => Some(OutputFormat::Abaqus),
@@ -830,7 +919,10 @@ pub struct CurveReport {
     /// Peak resident memory of the process when the report was written,
     /// in MiB (Linux's VmHWM; null elsewhere).
     pub peak_memory_mib: Option<f64>,
-    /// Files written.
+    /// Files written. The report file also records each one's size and
+    /// FNV-1a hash (`written`, with the files of other outputs in the
+    /// folder still as an earlier run wrote them): a rerun replaces or
+    /// removes only those ([`crate::io::folder`]).
     pub outputs: Vec<String>,
 }
 
@@ -839,9 +931,13 @@ pub struct CurveReport {
 /// only if every element is certified valid.
 pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     check_output_file(&job.output)?;
+    let (dir, _, report, claim) = job.destination();
+    check_set(&dir, &job.output_names(), &report, &claim)?;
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
     let read = crate::io::msh::parse_any(&bytes, true)?;
+    drop(bytes);
     unkept(&read.layout).map_err(|why| RunError::Unkept { path: job.input.clone(), why })?;
+    check_memory(&read.mesh, job)?;
     let geometry = job.geometry.as_deref().map(crate::app::bind::GeometryFile::read).transpose()?;
     let gfile = job.geometry.as_ref().map_or(String::new(), |g| g.display().to_string());
     if geometry.is_none() && job.cad.is_none() {
@@ -876,7 +972,56 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
             _ => curve_plane(mesh, &binding, input, &mut progress).map_err(|e| by_tag(e, tags, 1)),
         },
     };
-    result.map_err(|e| with_node_tag(e, &read.node_tags))
+    result.map_err(|e| in_the_files_tags(with_node_tag(e, &read.node_tags), &job.input))
+}
+
+/// A refusal of the mesh's structure by Algorithm 2's subdivision (0-based
+/// indices) told again by [`crate::io::msh::check_structure`]: the
+/// file's element and node tags and the cause (a hanging node, duplicate
+/// nodes, …). The file is read again only then.
+fn in_the_files_tags(e: RunError, input: &Path) -> RunError {
+    use crate::refine::SubdivideError;
+    match e {
+        RunError::Curve(CurveError::Subdivide(SubdivideError::NotACellFacet { .. } | SubdivideError::InteriorFacet { .. } | SubdivideError::Uncovered { .. })) => {
+            match std::fs::read(input).map(|bytes| crate::io::msh::check_structure(&bytes)) {
+                Ok(Err(told)) => told.into(),
+                _ => e,
+            }
+        }
+        e => e,
+    }
+}
+
+/// Refuses a `curve` run whose estimated peak memory
+/// ([`crate::app::memory::curve_estimate`]) is more than the process may
+/// allocate ([`crate::app::memory::headroom`]), saying what would fit.
+fn check_memory(mesh: &AnyMesh, job: &CurveJob) -> Result<(), RunError> {
+    use crate::app::memory::{curve_estimate, headroom, reserved_address_space, shown};
+    let (dim, vertices) = match mesh {
+        AnyMesh::Plane(m) => (2, m.nodes.len() as u64),
+        AnyMesh::Solid(m) => (3, m.nodes.len() as u64),
+    };
+    let whole = job.options.band.is_none();
+    let p = job.options.order.max(1) as u64;
+    let Some(room) = headroom() else { return Ok(()) };
+    // the address space also holds the threads' stacks and arenas
+    let reserved = if room.what.contains("RLIMIT_AS") { reserved_address_space() } else { 0 };
+    let need = |p: u64, whole: bool| curve_estimate(dim, vertices * p.pow(dim as u32), whole) + reserved;
+    if need(p, whole) <= room.bytes {
+        return Ok(());
+    }
+    let mut advice: Vec<String> = Vec::new();
+    if whole && need(p, false) <= room.bytes {
+        advice.push(format!("Without --band all (Algorithm 2 in a band along the curved walls) it needs about {}", shown(need(p, false))));
+    }
+    if let Some(q) = (1..p).rev().find(|&q| need(q, whole) <= room.bytes) {
+        advice.push(format!("At --order {q} it needs about {}", shown(need(q, whole))));
+    }
+    if advice.is_empty() {
+        advice.push("No lower order fits either: run it where more memory is available, or curve a coarser mesh".into());
+    }
+    let what = format!("estimated for {} nodes of order {p} in {dim}D{}", vertices * p.pow(dim as u32), if whole { ", --band all" } else { "" });
+    Err(RunError::Memory { need: need(p, whole), what, room, advice: advice.join("; ") + "." })
 }
 
 /// `curve` on a solid mesh of hexes or tetrahedra.
@@ -1277,8 +1422,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
     }
-    let stem = job.output.file_stem().map_or("curved".into(), |s| s.to_string_lossy().into_owned());
-    let dir = job.output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
+    let (dir, stem, report_name, claim) = job.destination();
     let min_det: Vec<f64> = c.certificates.iter().map(|x| x.min_det_lower).collect();
     let sj: Vec<f64> = c.certificates.iter().map(|x| x.min_scaled_jacobian).collect();
     let output = OutputSpec::default();
@@ -1306,8 +1450,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
         || rayon::join(|| main_file(job.format, &layout, &view), || vtk.then(|| c.mesh.vtu_string_with_attributes(&[("min_det_j", &min_det), ("min_scaled_jacobian", &sj)], &view.1)).transpose()),
         || -> Result<Vec<u8>, RunError> { Ok(png_bytes(&M::draw_curved(&c.mesh, &sj, &look)?)?) },
     );
-    let name = job.output.file_name().map_or_else(|| format!("{stem}.{}", job.format.extension()), |n| n.to_string_lossy().into_owned());
-    let mut files: Vec<(String, Vec<u8>)> = vec![(name, main?)];
+    let mut files: Vec<(String, Vec<u8>)> = vec![(claim.output.clone(), main?)];
     if let Some(vtu) = vtu? {
         files.push((format!("{stem}.vtu"), vtu.into_bytes()));
     }
@@ -1330,11 +1473,10 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
         certify_s: c.seconds.1,
         total_s: 0.0,
         peak_memory_mib: None,
-        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(format!("{stem}.report.json"))).collect(),
+        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(report_name.clone())).collect(),
     };
     report.total_s = clock.elapsed().as_secs_f64();
     report.peak_memory_mib = super::bench::peak_memory_mib();
-    files.push((format!("{stem}.report.json"), serde_json::to_string_pretty(&report).expect("report serialises").into_bytes()));
-    write_set(&dir, &files, &format!("{stem}.report.json"))?;
+    write_set(&dir, &files, &report_name, serde_json::to_value(&report).expect("report serialises"), &claim)?;
     Ok(report)
 }

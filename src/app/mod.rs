@@ -11,3 +11,4 @@ pub mod bind;
 pub mod cad;
 pub mod case;
 pub mod driver;
+pub mod memory;

@@ -10,7 +10,7 @@ fn curve(dir: &Path, input: PathBuf, geometry: &str, order: usize, steps: Option
     let g = dir.join("geometry.toml");
     std::fs::write(&g, geometry).unwrap();
     let name = format!("p{order}_{}.msh", band.map_or("all".into(), |w| w.to_string()));
-    let job = CurveJob { input, geometry: Some(g), cad: None, output: dir.join(name), format: deformesh::app::driver::OutputFormat::Msh41, options: CurveOptions { order, steps, band, ..Default::default() }, width: 300 };
+    let job = CurveJob { input, geometry: Some(g), cad: None, output: dir.join(name), format: deformesh::app::driver::OutputFormat::Msh41, options: CurveOptions { order, steps, band, ..Default::default() }, width: 300, force: false };
     curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("p = {order}, band {band:?}: {e}"))
 }
 
@@ -78,7 +78,7 @@ fn the_multigrid_keeps_its_iterations_on_thin_layers() {
             std::fs::write(&g, geometry).unwrap();
             let flow = deformesh::deform::DeformOptions { solver: deformesh::deform::SolverChoice::Amg, ..Default::default() };
             let options = CurveOptions { order: p, flow, ..Default::default() };
-            let job = CurveJob { input, geometry: Some(g), cad: None, output: dir.path().join(format!("p{p}_{first}.msh")), format: deformesh::app::driver::OutputFormat::Msh41, options, width: 300 };
+            let job = CurveJob { input, geometry: Some(g), cad: None, output: dir.path().join(format!("p{p}_{first}.msh")), format: deformesh::app::driver::OutputFormat::Msh41, options, width: 300, force: false };
             let r = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("first layer {first} at p = {p}: {e}"));
             let s = &r.solver;
             assert!(r.quality.invalid_elements.is_empty() && s.solver.contains("AMG") && !s.solver.contains("Cholesky"), "first layer {first} at p = {p}: {}", s.solver);
@@ -125,7 +125,7 @@ fn the_report_gives_the_peak_memory_the_kernel_measured() {
 fn curve_snap_first(dir: &Path, input: PathBuf, geometry: &str, order: usize, name: &str) -> CurveReport {
     let g = dir.join(format!("{name}.geometry.toml"));
     std::fs::write(&g, geometry).unwrap();
-    let job = CurveJob { input, geometry: Some(g), cad: None, output: dir.join(format!("{name}.msh")), format: deformesh::app::driver::OutputFormat::Msh41, options: CurveOptions { order, snap_first: true, ..Default::default() }, width: 300 };
+    let job = CurveJob { input, geometry: Some(g), cad: None, output: dir.join(format!("{name}.msh")), format: deformesh::app::driver::OutputFormat::Msh41, options: CurveOptions { order, snap_first: true, ..Default::default() }, width: 300, force: false };
     curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 

@@ -24,6 +24,7 @@ fn job(dir: &Path, mesh: &str, geometry: &str, order: usize, steps: usize) -> Cu
         format: deformesh::app::driver::OutputFormat::Msh41,
         options: CurveOptions { order, steps: Some(steps), ..Default::default() },
         width: 400,
+        force: false,
     }
 }
 

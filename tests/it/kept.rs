@@ -56,6 +56,7 @@ fn curve_to(dir: &Path, input: &Path, geometry: &str, order: usize, out: &str, f
         format,
         options: CurveOptions { order, ..Default::default() },
         width: 300,
+        force: false,
     };
     curve_file(&job, |_| {}).map(|r| (r, output))
 }
@@ -182,7 +183,7 @@ fn periodic_triangles_and_tetrahedra_keep_their_pairs() {
         let output = dir.path().join("gll.msh");
         let g = dir.path().join("geometry.toml");
         let options = CurveOptions { order: 3, spacing: deformesh::highorder::Spacing::GaussLobatto, ..Default::default() };
-        let job = CurveJob { input: input.clone(), geometry: Some(g), cad: None, output, format: OutputFormat::Msh41, options, width: 300 };
+        let job = CurveJob { input: input.clone(), geometry: Some(g), cad: None, output, format: OutputFormat::Msh41, options, width: 300, force: false };
         let report = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{kind}, Gauss-Lobatto: {e}"));
         assert!(report.quality.invalid_elements.is_empty());
     }

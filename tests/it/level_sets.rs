@@ -23,6 +23,7 @@ fn curve(dir: &Path, name: &str, mesh: &str, geometry: &str, p: usize) -> PathBu
         format: OutputFormat::Msh41,
         options: CurveOptions { order: p, ..Default::default() },
         width: 200,
+        force: false,
     };
     curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
     job.output

@@ -28,3 +28,4 @@ mod repair;
 mod simplex_orders;
 mod simplices;
 mod solver_failure;
+mod trust;

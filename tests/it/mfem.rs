@@ -356,7 +356,7 @@ fn mfem_integrates_curved_quarter_disks_and_ball_octants() {
         for &p in orders {
             let run = |name: &str, format| {
                 let options = deformesh::highorder::curve::CurveOptions { order: p, ..Default::default() };
-                let job = CurveJob { input: input.clone(), geometry: Some(g.clone()), cad: None, output: dir.path().join(name), format, options, width: 200 };
+                let job = CurveJob { input: input.clone(), geometry: Some(g.clone()), cad: None, output: dir.path().join(name), format, options, width: 200, force: false };
                 curve_file(&job, |_| {}).unwrap()
             };
             let report = run(&format!("d{dim}p{p}.mesh"), OutputFormat::Mfem);

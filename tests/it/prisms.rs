@@ -36,7 +36,7 @@ fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, Pat
     let g = dir.join("geometry.toml");
     std::fs::write(&g, geometry).unwrap();
     let output = dir.join(format!("{}_p{p}.msh", file.file_stem().unwrap().to_string_lossy()));
-    let job = CurveJob { input: file.to_path_buf(), geometry: Some(g), cad: None, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300 };
+    let job = CurveJob { input: file.to_path_buf(), geometry: Some(g), cad: None, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300, force: false };
     let r = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{} at p = {p}: {e}", file.display()));
     (r, output)
 }

@@ -30,7 +30,7 @@ fn curve(dir: &Path, file: &Path, geometry: &str, p: usize) -> (CurveReport, Pat
     let g = dir.join("geometry.toml");
     std::fs::write(&g, geometry).unwrap();
     let output = dir.join(format!("{}_p{p}.msh", file.file_stem().unwrap().to_string_lossy()));
-    let job = CurveJob { input: file.to_path_buf(), geometry: Some(g), cad: None, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300 };
+    let job = CurveJob { input: file.to_path_buf(), geometry: Some(g), cad: None, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300, force: false };
     let r = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{} at p = {p}: {e}", file.display()));
     (r, output)
 }
@@ -228,7 +228,7 @@ fn the_snap_is_kept_on_the_tet_ball_where_it_keeps_the_worst_tet_within_0_9() {
         for p in [2, 3] {
             let output = dir.path().join(format!("snapped_{size}_p{p}.msh"));
             let options = CurveOptions { order: p, snap_first: true, ..Default::default() };
-            let job = CurveJob { input: file.clone(), geometry: Some(g.clone()), cad: None, output: output.clone(), format: OutputFormat::Msh41, options, width: 300 };
+            let job = CurveJob { input: file.clone(), geometry: Some(g.clone()), cad: None, output: output.clone(), format: OutputFormat::Msh41, options, width: 300, force: false };
             let r = curve_file(&job, |_| {}).unwrap();
             let snap = &r.quality.snap_first;
             assert!(snap.kept && r.quality.invalid_elements.is_empty(), "size {size}, p = {p}: {snap:?}");

@@ -27,6 +27,7 @@ fn job(dir: &Path, flow: DeformOptions) -> CurveJob {
         format: OutputFormat::Msh41,
         options: CurveOptions { order: 2, steps: Some(4), flow, ..Default::default() },
         width: 200,
+        force: false,
     }
 }
 

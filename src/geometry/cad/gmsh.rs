@@ -86,6 +86,12 @@ fn candidates(library: Option<&Path>) -> Result<Vec<PathBuf>, CadError> {
     let names = ["libgmsh.so.4.15", "libgmsh.so", "libgmsh.so.4.14", "libgmsh.so.4.13", "libgmsh.so.4.12", "libgmsh.so.4.11", "libgmsh.dylib", "gmsh.dll"];
     let in_folder = |dir: &Path| names.iter().map(|n| dir.join(n)).collect::<Vec<_>>();
     let given = library.map(Path::to_path_buf).or_else(|| std::env::var_os("DEFORMESH_GMSH_LIB").map(PathBuf::from));
+    if given.as_ref().is_some_and(|p| p.as_os_str().is_empty()) {
+        // an empty name would load the running program itself
+        return Err(CadError::Library {
+            why: "DEFORMESH_GMSH_LIB is set but empty: set it to Gmsh's library file (e.g. .venv/lib/libgmsh.so.4.15) or a folder holding it, or unset it to search the Python `gmsh` package and the system path".into(),
+        });
+    }
     if let Some(p) = given {
         // a named place is the only one: falling back would hide the mistake
         return Ok(if p.is_dir() { in_folder(&p) } else { vec![p] });
@@ -115,6 +121,46 @@ unsafe fn symbol<T: Copy>(lib: &libloading::Library, path: &Path, name: &str) ->
     unsafe { lib.get::<T>(c.as_bytes_with_nul()) }.map(|s| *s).map_err(|e| CadError::Library {
         why: format!("`{}` has no `{name}` ({e}): it is not Gmsh's library, or a Gmsh older than {}.{}", path.display(), OLDEST.0, OLDEST.1),
     })
+}
+
+/// While alive, what the process writes to its stdout (file descriptor 1)
+/// goes to its stderr; restored when dropped.
+struct StdoutToStderr {
+    #[cfg(unix)]
+    saved: libc::c_int,
+}
+
+impl StdoutToStderr {
+    fn begin() -> StdoutToStderr {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        // SAFETY: dup and dup2 of the process's standard descriptors
+        #[cfg(unix)]
+        unsafe {
+            libc::fflush(std::ptr::null_mut());
+            let saved = libc::dup(1);
+            if saved >= 0 {
+                libc::dup2(2, 1);
+            }
+            StdoutToStderr { saved }
+        }
+        #[cfg(not(unix))]
+        StdoutToStderr {}
+    }
+}
+
+impl Drop for StdoutToStderr {
+    fn drop(&mut self) {
+        // SAFETY: C's buffers flushed into stderr, then fd 1 put back
+        #[cfg(unix)]
+        unsafe {
+            libc::fflush(std::ptr::null_mut());
+            if self.saved >= 0 {
+                libc::dup2(self.saved, 1);
+                libc::close(self.saved);
+            }
+        }
+    }
 }
 
 impl Session {
@@ -232,7 +278,11 @@ impl Session {
         unsafe { (self.api.model_add)(name.as_ptr(), &mut ierr) };
         self.check(ierr, "gmshModelAdd")?;
         self.current = Some(name.clone());
+        // OpenCASCADE prints its diagnostics to stdout, which is the
+        // user's (a pipe of our figures): they go to stderr
+        let _stdout = StdoutToStderr::begin();
         unsafe { (self.api.merge)(path.as_ptr(), &mut ierr) };
+        drop(_stdout);
         self.check(ierr, "gmshMerge")?;
         Ok(name)
     }

@@ -92,6 +92,44 @@ fn absent_message(named: bool, tried: &[String]) -> String {
     )
 }
 
+/// A link (or a copy) of a model file under a name whose extension is in
+/// lower case, in a folder of its own under the temporary folder; removed
+/// when dropped.
+struct LowerCaseLink {
+    path: PathBuf,
+}
+
+impl LowerCaseLink {
+    fn new(file: &Path, ext: &str) -> Result<LowerCaseLink, CadError> {
+        static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("deformesh-cad-{}-{n}", std::process::id()));
+        let stem = file.file_stem().map_or("model".into(), |s| s.to_string_lossy().into_owned());
+        let path = dir.join(format!("{stem}.{ext}"));
+        let fail = |e: std::io::Error| CadError::Gmsh { call: "reading the model".into(), message: format!("cannot link `{}` under a lower-case extension in `{}`: {e}", file.display(), dir.display()) };
+        std::fs::create_dir_all(&dir).map_err(fail)?;
+        let target = file.canonicalize().map_err(fail)?;
+        #[cfg(unix)]
+        let made = std::os::unix::fs::symlink(&target, &path).or_else(|_| std::fs::copy(&target, &path).map(|_| ()));
+        #[cfg(not(unix))]
+        let made = std::fs::copy(&target, &path).map(|_| ());
+        if let Err(e) = made {
+            let _ = std::fs::remove_dir_all(&dir);
+            return Err(fail(e));
+        }
+        Ok(LowerCaseLink { path })
+    }
+}
+
+impl Drop for LowerCaseLink {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+        if let Some(dir) = self.path.parent() {
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
+}
+
 /// A CAD file read by Gmsh into a model of its own.
 #[derive(Debug)]
 pub struct CadModel {
@@ -115,7 +153,13 @@ impl CadModel {
         }
         let mut guard = gmsh::session(library)?;
         let s = guard.as_mut().expect("session loaded");
-        let name = s.open(file)?;
+        // Gmsh tells the format by the extension as written, lower or upper
+        // case alone (`.step`, `.STEP`), and reads any other as a .geo
+        // script: a `.Stp` is read through a link of a lower-case name
+        let written = file.extension().and_then(|e| e.to_str()).unwrap_or_default();
+        let link = (written != ext && !ext.starts_with("geo")).then(|| LowerCaseLink::new(file, &ext)).transpose()?;
+        let name = s.open(link.as_ref().map_or(file, |l| l.path.as_path()))?;
+        drop(link);
         Ok(Arc::new(CadModel { name, file: file.to_path_buf(), library: s.path.clone(), version: s.version.clone(), failure: Mutex::new(None) }))
     }
 

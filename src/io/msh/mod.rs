@@ -17,6 +17,7 @@
 
 mod build;
 mod read;
+mod structure;
 mod v22;
 mod types;
 mod write;
@@ -222,12 +223,77 @@ pub enum MshError {
         /// What to do.
         why: &'static str,
     },
+    /// One element tag on two elements of an MSH 4.1 file.
+    #[error(
+        "element tag {tag} is used twice: by the element with nodes {first_nodes} and by the one with nodes {second_nodes}, {}: element tags must be unique (renumber the elements, e.g. gmsh.model.mesh.renumberElements())",
+        if first == second { format!("both in the element block at {first}") } else { format!("in the element blocks at {first} and {second}") }
+    )]
+    DuplicateElementTag {
+        /// The tag.
+        tag: u64,
+        /// The block header of the first element.
+        first: Pos,
+        /// Its node tags.
+        first_nodes: String,
+        /// The block header of the second.
+        second: Pos,
+        /// Its node tags.
+        second_nodes: String,
+    },
+    /// A file without cells of dimension 2 or 3 (a 1D or boundary mesh).
+    #[error("{at}: no cells (the file holds {found}): a mesh of the domain is expected, of triangles or quads (2D) or of tetrahedra, hexahedra, prisms or pyramids (3D), not of its boundary only (in Gmsh, mesh the surfaces or volumes: Mesh 2 or 3, `gmsh -2` or `-3`)")]
+    NoCells {
+        /// The `$Elements` header.
+        at: Pos,
+        /// What the file holds instead.
+        found: String,
+    },
+    /// Element blocks of different orders in one mesh.
+    #[error("{at}: an element block of order {found} in a mesh whose first cell is of order {order}: a mesh has one order (each order from 1 to 4 is read, all of the mesh's cells and boundary elements at that order)")]
+    MixedOrders {
+        /// The block header.
+        at: Pos,
+        /// The first cell's order.
+        order: usize,
+        /// This block's.
+        found: usize,
+    },
+    /// A compressed file (gzip, ...), not an MSH file itself.
+    #[error("the file is {0}-compressed, not an MSH file: decompress it first (e.g. `{cmd} FILE`)", cmd = decompressor(.0))]
+    Compressed(&'static str),
+    /// The cells and boundary elements do not make one mesh (the message
+    /// names the file's element and node tags).
+    #[error("{0}")]
+    Structure(String),
     /// A required section is absent.
     #[error("missing section ${0}")]
     MissingSection(&'static str),
     /// The mesh to write is inconsistent.
     #[error("cannot write mesh: {0}")]
     InvalidMesh(String),
+}
+
+/// The command that decompresses a file of `format`.
+fn decompressor(format: &str) -> &'static str {
+    match format {
+        "gzip" => "gunzip",
+        "bzip2" => "bunzip2",
+        "xz" => "unxz",
+        "zstd" => "unzstd",
+        _ => "unzip",
+    }
+}
+
+/// The compression `bytes` start with (gzip, zip, bzip2, xz, zstd), if any.
+fn compressed(bytes: &[u8]) -> Option<&'static str> {
+    match bytes {
+        [0x1f, 0x8b, ..] => Some("gzip"),
+        [b'P', b'K', 3, 4, ..] => Some("zip"),
+        [b'B', b'Z', b'h', ..] => Some("bzip2"),
+        [0xfd, b'7', b'z', b'X', b'Z', 0, ..] => Some("xz"),
+        [0x28, 0xb5, 0x2f, 0xfd, ..] => Some("zstd"),
+        _ => None,
+    }
 }
 
 /// A syntax error at `at`.
@@ -371,17 +437,44 @@ pub struct Tagged {
 
 /// Parses an MSH 4.1 file (ASCII or binary) into the mesh it holds: the
 /// first element block of the highest dimension (2 at least) sets the
-/// dimension and the order. `linear_only` refuses elements of order > 1.
+/// dimension and the order. A file without cells, or with cells and
+/// boundary elements of several orders, is refused. `linear_only`
+/// refuses elements of order > 1.
 pub fn parse_any(bytes: &[u8], linear_only: bool) -> Result<Tagged, MshError> {
+    read_any(bytes, linear_only, false)
+}
+
+/// Checks that the cells and boundary elements of the linear mesh in
+/// `bytes` make one conforming mesh whose boundary the boundary elements
+/// cover, naming the file's tags and the cause where they do not (a
+/// hanging node, nodes given twice at one place, a boundary element inside
+/// the mesh or on no cell, boundary edges or faces in no boundary
+/// element): `curve` asks it when Algorithm 2's subdivision refuses the
+/// mesh, whose message has 0-based indices only.
+pub fn check_structure(bytes: &[u8]) -> Result<(), MshError> {
+    read_any(bytes, true, true).map(|_| ())
+}
+
+fn read_any(bytes: &[u8], linear_only: bool, structure: bool) -> Result<Tagged, MshError> {
     let raw = read::parse(bytes, if linear_only { LINEAR[1] } else { CURVED[1] })?;
     let top = raw.blocks.iter().map(|b| b.kind.dim).max().unwrap_or(0).max(2);
+    if !raw.blocks.iter().any(|b| b.kind.dim == top && !b.tags.is_empty()) {
+        return Err(MshError::NoCells { at: raw.elements_at.expect("read"), found: raw.element_counts() });
+    }
     let order = raw.blocks.iter().find(|b| b.kind.dim == top).map_or(1, |b| b.kind.order);
+    // (the linear reader refuses every element of order > 1 as it reads)
+    if let Some(b) = raw.blocks.iter().find(|b| b.kind.dim + 1 >= top && !b.tags.is_empty() && b.kind.order != order) {
+        return Err(MshError::MixedOrders { at: b.at, order, found: b.kind.order });
+    }
     let (mesh, cell_tags) = match (top, order) {
         (3, 1) => raw.linear_solid().map(|(m, t)| (AnyMesh::Solid(m), t))?,
         (3, _) => raw.curved_mesh().map(|(m, t)| (AnyMesh::Solid(m), t))?,
         (_, 1) => raw.linear_plane().map(|(m, t)| (AnyMesh::Plane(m), t))?,
         _ => raw.curved_mesh().map(|(m, t)| (AnyMesh::Plane(m), t))?,
     };
+    if structure {
+        raw.check_structure(top)?;
+    }
     Ok(Tagged { mesh, cell_tags, layout: raw.layout(), node_tags: raw.node_tags })
 }
 

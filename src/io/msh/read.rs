@@ -115,6 +115,9 @@ pub(super) struct PeriodicTags {
 /// Reads every section of an MSH 4.1 file; element types other than the
 /// `accept`ed ones are an error at their block header.
 pub(super) fn parse(bytes: &[u8], accept: Accept) -> Result<Raw, MshError> {
+    if let Some(format) = super::compressed(bytes) {
+        return Err(MshError::Compressed(format));
+    }
     let mut r = Reader::ascii(bytes);
     if r.mesh_format()? == Version::V2 {
         return super::v22::parse(bytes, accept);
@@ -272,8 +275,50 @@ fn elements(r: &mut Reader, raw: &mut Raw, accept: Accept) -> Result<(), MshErro
     if found != total {
         return Err(MshError::CountMismatch { at, what: "number of elements", expected: total, found });
     }
+    raw.unique_element_tags()?;
     raw.elements_at = Some(at);
     r.expect("$EndElements")
+}
+
+impl Raw {
+    /// Fails on an element tag given to two elements, naming both.
+    fn unique_element_tags(&self) -> Result<(), MshError> {
+        let mut all: Vec<(u64, usize, usize)> = self.blocks.iter().enumerate().flat_map(|(b, block)| block.tags.iter().enumerate().map(move |(i, &t)| (t, b, i))).collect();
+        all.sort_unstable();
+        let Some(w) = all.windows(2).find(|w| w[0].0 == w[1].0) else { return Ok(()) };
+        let nodes = |&(_, b, i): &(u64, usize, usize)| {
+            let block = &self.blocks[b];
+            block.nodes[i * block.kind.nodes..(i + 1) * block.kind.nodes].iter().map(|&n| self.node_tags[n].to_string()).collect::<Vec<_>>().join(" ")
+        };
+        Err(MshError::DuplicateElementTag { tag: w[0].0, first: self.blocks[w[0].1].at, first_nodes: nodes(&w[0]), second: self.blocks[w[1].1].at, second_nodes: nodes(&w[1]) })
+    }
+
+    /// What elements the file holds, for a message: "4 lines and 2 points".
+    pub(super) fn element_counts(&self) -> String {
+        let mut counts: Vec<(Shape, usize)> = Vec::new();
+        for b in self.blocks.iter().filter(|b| !b.tags.is_empty()) {
+            match counts.iter_mut().find(|c| c.0 == b.kind.shape) {
+                Some(c) => c.1 += b.tags.len(),
+                None => counts.push((b.kind.shape, b.tags.len())),
+            }
+        }
+        let named: Vec<String> = counts
+            .iter()
+            .map(|&(shape, n)| {
+                let name = format!("{shape:?}").to_lowercase();
+                let plural = match name.strip_suffix("on") {
+                    Some(stem) if name.ends_with("hedron") => format!("{stem}a"),
+                    _ => format!("{name}s"),
+                };
+                format!("{n} {}", if n == 1 { name } else { plural })
+            })
+            .collect();
+        match named.as_slice() {
+            [] => "no elements".into(),
+            [one] => one.clone(),
+            [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+        }
+    }
 }
 
 /// `$Periodic`: the number of links, then per link `dim tag masterTag`,
