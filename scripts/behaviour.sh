@@ -17,6 +17,7 @@
 # prose `definitions`. So: cells, nodes, unknowns, steps, halved steps,
 # solves, the solver chosen, det J and scaled-Jacobian ranges, invalid
 # cells, cell sizes, J/f min/max/L2/CoV, boundary distances, the
+# repair's candidates (a list of records, each compared field by field),
 # normalisation constant, high-order certification figures, and the
 # command's exit status.
 # Integers, strings, lists and booleans must be equal. Floats (report.json
@@ -130,6 +131,11 @@ def flatten(v, prefix, out):
         for k, x in v.items():
             if not skipped(k):
                 flatten(x, f"{prefix}.{k}" if prefix else k, out)
+    elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+        # a list of records (the repair's candidates): each by its index,
+        # so their times are skipped and their floats compared to RTOL
+        for i, x in enumerate(v):
+            flatten(x, f"{prefix}[{i}]", out)
     else:
         out[prefix] = v
     return out

@@ -82,7 +82,9 @@ pub struct Candidate {
     /// lowered where det J dips between the samples); None where one is
     /// not certified valid.
     pub min_scaled_jacobian: Option<f64>,
-    /// Seconds it took, certification included.
+    /// Seconds it took, certification included (`time_s` in the report:
+    /// a time, which `behaviour.sh` does not compare).
+    #[serde(rename = "time_s")]
     pub seconds: f64,
     /// Why it ended without a result, if it did (a run that stalled or
     /// spent its budget of steps, a failed solve).
