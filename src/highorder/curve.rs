@@ -890,7 +890,7 @@ where
             tracing::info!("the snap kept every element valid and shaped: Algorithm 2 not run");
             (snap_first.kept, snap_first.fitted) = (true, fitted);
             (repair.won, repair.why) = ("snap".into(), "every element certified valid and shaped".into());
-            Some(pass)
+            Some(*pass)
         }
         Some(SnapOutcome::Refused(snap)) => {
             tracing::info!("the snap was not kept ({}): repair in patches", snap.why);
@@ -1477,7 +1477,7 @@ fn moved_cells<const D: usize>(mesh: &CurvedMesh<D>, before: &[[f64; D]]) -> Vec
 pub(super) enum SnapOutcome<const D: usize> {
     /// Every element certified valid and shaped: the result, and whether
     /// its places were the fitted ones.
-    Kept(Pass<D>, bool),
+    Kept(Box<Pass<D>>, bool),
     /// Not kept: what it left, for the repair in patches.
     Refused(Snap<D>),
 }
@@ -1640,7 +1640,7 @@ where
         }
         quality.settling = Settling { largest_move, fitted, ..Default::default() };
         let pass = Pass { mesh: snapped, certificates, quality, stats: RunStats::default(), solver: Default::default(), moved_distance };
-        return Ok(SnapOutcome::Kept(pass, fitted));
+        return Ok(SnapOutcome::Kept(Box::new(pass), fitted));
     }
     Ok(SnapOutcome::Refused(refused.expect("a try that was not kept left its snap")))
 }

@@ -433,7 +433,7 @@ where
     let t0 = Instant::now();
     let mut known = repaired.certificates.clone();
     if let Some(p) = &snap_pass {
-        known.extend((0..all).filter(|c| !repaired.certificates.contains_key(c)).map(|c| (c, p.certificates[c].clone())));
+        known.extend((0..all).filter(|c| !repaired.certificates.contains_key(c)).map(|c| (c, p.certificates[c])));
     }
     let (certificates, mut quality) = certify_mesh_straight(&repaired.mesh, straight, &known)?;
     *certify_s += t0.elapsed().as_secs_f64();
