@@ -635,12 +635,7 @@ fn format_candidates(r: &deformesh::highorder::repair::Repair) -> String {
             Some(k) => format!(" of {k} rings ({} elements, {:.1} % of the mesh)", c.elements, 100.0 * c.share),
             None => String::new(),
         };
-        let result = match (&c.ended, c.min_scaled_jacobian) {
-            (Some(why), _) => format!("ended: {why}"),
-            (None, Some(m)) => format!("valid, least scaled Jacobian {m:.4}"),
-            (None, None) => format!("{} element(s) not certified valid", c.invalid),
-        };
-        out += &format!("candidate: {}{size}: {result} ({:.3}s)\n", c.name, c.seconds);
+        out += &format!("candidate: {}{size}: {} ({:.3}s)\n", c.name, c.outcome(), c.seconds);
     }
     out += &format!("written: {}: {}\n", r.won, r.why);
     out

@@ -91,6 +91,17 @@ pub struct Candidate {
     pub ended: Option<String>,
 }
 
+impl Candidate {
+    /// How it ended, for the terminal and messages.
+    pub fn outcome(&self) -> String {
+        match (&self.ended, self.min_scaled_jacobian) {
+            (Some(why), _) => format!("ended: {why}"),
+            (None, Some(m)) => format!("valid, least scaled Jacobian {m:.4}"),
+            (None, None) => format!("{} element(s) not certified valid", self.invalid),
+        }
+    }
+}
+
 /// Elements by node: for each node, the elements that hold it.
 struct NodeElements {
     first: Vec<usize>,
@@ -264,12 +275,7 @@ pub fn tried(r: &Repair) -> String {
             Some(k) => format!("a {} of {k} rings ({} elements)", c.name, c.elements),
             None => format!("the {}", c.name),
         };
-        let how = match (&c.ended, c.min_scaled_jacobian) {
-            (Some(why), _) => format!("ended: {why}"),
-            (None, Some(m)) => format!("valid, least scaled Jacobian {m:.4}"),
-            (None, None) => format!("left {} element(s) not certified valid", c.invalid),
-        };
-        format!("{what} {how}")
+        format!("{what}: {}", c.outcome())
     });
     each.collect::<Vec<_>>().join("; ")
 }
