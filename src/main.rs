@@ -157,6 +157,11 @@ enum Command {
         /// (`pip install gmsh`), else the system's.
         #[arg(long)]
         cad: Option<PathBuf>,
+        /// Multiply the CAD model's coordinates by this factor: 1000 for a
+        /// mesh in millimetres made from a model in metres, 0.001 for the
+        /// reverse (STEP, IGES, BREP and XAO models).
+        #[arg(long, default_value_t = 1.0, requires = "cad")]
+        cad_scale: f64,
         /// The geometry file (TOML `[[group]]` tables: name, kind, shape);
         /// with --cad it may set groups to `slip` or `fixed`, or give them
         /// another shape.
@@ -303,7 +308,8 @@ fn run(cli: Cli) -> Result<()> {
             let setup = Case::parse(DEMO_CASE, "<built-in demo>")?.setup_any("<built-in demo>", Path::new("."))?;
             run_and_print(setup, (&out, force), "<built-in demo>")
         }
-        Command::Curve { mesh, cad, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, snap, out, format, force } => {
+        Command::Curve { mesh, cad, cad_scale, geometry, order, spacing, steps, mode, solver, shape_tolerance, band, snap, out, format, force } => {
+            usage(cad_scale.is_finite() && cad_scale > 0.0, || format!("--cad-scale must be a positive number, got {cad_scale}"))?;
             usage(shape_tolerance.is_finite() && shape_tolerance > 0.0, || format!("--shape-tolerance must be a positive number, got {shape_tolerance}"))?;
             deformesh::highorder::check_order(order).map_err(|e| Usage(format!("--order: {e}")))?;
             usage(steps != Some(0), || "--steps must be at least 1".into())?;
@@ -334,7 +340,7 @@ fn run(cli: Cli) -> Result<()> {
             let options = deformesh::highorder::curve::CurveOptions { order, spacing, steps, dirichlet, settle, flow, shape_tolerance, band, snap_first, ..Default::default() };
             deformesh::io::folder::check_output_file(&out).map_err(RunError::from)?;
             let cad_file = cad.clone();
-            let cad = cad.map(|model| deformesh::app::driver::CadSource { model, library: None });
+            let cad = cad.map(|model| deformesh::app::driver::CadSource { model, library: None, scale: cad_scale });
             let job = deformesh::app::driver::CurveJob { input: mesh.clone(), geometry, cad, output: out.clone(), format, options, width: 900, force };
             let bar = Bar::new();
             let r = deformesh::app::driver::curve_file(&job, |p| bar.update(p)).map_err(|e| blame_cad(e, &mesh.display().to_string(), cad_file.as_deref()));
@@ -345,6 +351,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             for g in &r.unbound_groups {
                 eprintln!("group `{g}` is not in the geometry file: its nodes stay where they are");
+            }
+            if let Some(c) = &r.cad {
+                println!("{}", format_bound(c, r.dimension));
             }
             print!("{}", format_curved(&r.quality));
             println!(
@@ -624,6 +633,20 @@ fn settling_line(s: &deformesh::highorder::curve::Settling, dirichlet: bool) -> 
             format!("settling: new boundary nodes put at their {places} along the arcs ({}, largest move {:.2e}){demoted}", how.unwrap_or("-"), s.largest_move)
         }
     }
+}
+
+/// One line on how the mesh's boundary was bound to the CAD model.
+fn format_bound(c: &deformesh::app::driver::CadReport, dim: usize) -> String {
+    let word = if dim == 2 { "curve" } else { "surface" };
+    let model: std::collections::BTreeSet<&String> = c.bound.iter().flat_map(|b| b.model.keys()).collect();
+    let by_tag = c.bound.iter().filter(|b| b.by_tag).count();
+    let far = c.bound.iter().map(|b| b.max_distance).fold(0.0, f64::max);
+    let scale = if c.scale != 1.0 { format!(", the model scaled by {}", c.scale) } else { String::new() };
+    format!(
+        "cad: {} {word}(s) of the mesh bound by geometry to {} {word}(s) of the model ({by_tag} of them on the model's {word} of their own tag){scale}; boundary nodes within {far:.3e} of them",
+        c.bound.len(),
+        model.len()
+    )
 }
 
 /// The candidates of a `curve` run after a refused snap, a line each, and

@@ -786,6 +786,9 @@ pub struct CadSource {
     /// Gmsh's library (a file or a folder), before the search of
     /// [`crate::geometry::cad`]'s loader.
     pub library: Option<PathBuf>,
+    /// The factor the model's coordinates are multiplied by (a model in
+    /// other units than the mesh's; `--cad-scale`), 1 if none.
+    pub scale: f64,
 }
 
 /// The CAD model of a `curve --cad` run, for its report.
@@ -797,6 +800,10 @@ pub struct CadReport {
     pub library: String,
     /// Its version.
     pub gmsh_version: String,
+    /// The factor its coordinates were multiplied by (`--cad-scale`).
+    pub scale: f64,
+    /// Per entity of the mesh, the model's entities it was bound to.
+    pub bound: Vec<crate::app::cad::Bound>,
 }
 
 /// How `curve` binds a mesh's boundary: a geometry file, a CAD model, or
@@ -946,7 +953,7 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
     let model = match &job.cad {
         Some(c) => {
             std::fs::metadata(&c.model).map_err(|cause| RunError::Read { path: c.model.clone(), cause })?;
-            Some(crate::geometry::cad::CadModel::open(&c.model, c.library.as_deref())?)
+            Some(crate::geometry::cad::CadModel::open_scaled(&c.model, c.library.as_deref(), c.scale)?)
         }
         None => None,
     };
@@ -1033,8 +1040,10 @@ where
     if let Some(model) = binding.model {
         let facets: Vec<(Vec<usize>, usize)> = mesh.faces.iter().map(|f| (f.nodes.to_vec(), f.part)).collect();
         let cad = crate::app::cad::bind::<3>(model, (job.1, &mesh.nodes), (&facets, names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
-        let mesh = SolidMesh::<N, K>::assemble(mesh.nodes, mesh.cells, cad.facets, cad.names);
-        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some(model)));
+        let mut nodes = mesh.nodes;
+        cad.put_on_model(&mut nodes);
+        let mesh = SolidMesh::<N, K>::assemble(nodes, mesh.cells, cad.facets, cad.names);
+        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some((model, cad.bound))));
     }
     let geometry = binding.geometry.expect("a geometry file where there is no model");
     let (parts, unbound) = geometry.parts::<3>(names, gfile)?;
@@ -1050,9 +1059,10 @@ fn curve_mixed_solid(mut mesh: CurvedMesh<3>, binding: &Binding, job: (&CurveJob
     let facets = mesh.linear_facets();
     if let Some(model) = binding.model {
         let cad = crate::app::cad::bind::<3>(model, (job.1, &mesh.nodes), (&facets, &mesh.part_names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
+        cad.put_on_model(&mut mesh.nodes);
         mesh.set_linear_facets(cad.facets);
         mesh.part_names = cad.names;
-        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some(model)));
+        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), 0, job, (progress, Some((model, cad.bound))));
     }
     let geometry = binding.geometry.expect("a geometry file where there is no model");
     let names = mesh.part_names.clone();
@@ -1167,7 +1177,7 @@ trait PlaneInput: Curvable<2> {
     /// See [`PlaneMesh::orient_counter_clockwise`].
     fn orient(&mut self) -> usize;
     /// The nodes and the part names.
-    fn nodes_and_names(&mut self) -> (&[[f64; 2]], &mut Vec<String>);
+    fn nodes_and_names(&mut self) -> (&mut [[f64; 2]], &mut Vec<String>);
     /// The boundary edges and their parts.
     fn edges(&self) -> Vec<(Vec<usize>, usize)>;
     /// Replaces the boundary edges (to keep one copy of each, or regroup
@@ -1179,8 +1189,8 @@ impl<const N: usize> PlaneInput for PlaneMesh<N> {
     fn orient(&mut self) -> usize {
         self.orient_counter_clockwise()
     }
-    fn nodes_and_names(&mut self) -> (&[[f64; 2]], &mut Vec<String>) {
-        (&self.nodes, &mut self.part_names)
+    fn nodes_and_names(&mut self) -> (&mut [[f64; 2]], &mut Vec<String>) {
+        (&mut self.nodes, &mut self.part_names)
     }
     fn edges(&self) -> Vec<(Vec<usize>, usize)> {
         self.edges.iter().map(|e| (e.nodes.to_vec(), e.part)).collect()
@@ -1194,8 +1204,8 @@ impl PlaneInput for CurvedMesh<2> {
     fn orient(&mut self) -> usize {
         self.orient_counter_clockwise()
     }
-    fn nodes_and_names(&mut self) -> (&[[f64; 2]], &mut Vec<String>) {
-        (&self.nodes, &mut self.part_names)
+    fn nodes_and_names(&mut self) -> (&mut [[f64; 2]], &mut Vec<String>) {
+        (&mut self.nodes, &mut self.part_names)
     }
     fn edges(&self) -> Vec<(Vec<usize>, usize)> {
         self.linear_facets()
@@ -1214,9 +1224,10 @@ fn curve_plane(mut mesh: impl PlaneInput, binding: &Binding, job: (&CurveJob, &c
     let (nodes, names) = mesh.nodes_and_names();
     if let Some(model) = binding.model {
         let cad = crate::app::cad::bind::<2>(model, (job.1, nodes), (&edges, names), binding.geometry.map(|g| (g, gfile)), job.0.options.shape_tolerance)?;
+        cad.put_on_model(nodes);
         *names = cad.names;
         mesh.set_edges(cad.facets);
-        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), turned, job, (progress, Some(model)));
+        return curve_mesh(&mesh, &cad.parts, (Vec::new(), &[]), turned, job, (progress, Some((model, cad.bound))));
     }
     let geometry = binding.geometry.expect("a geometry file where there is no model");
     let names = names.to_vec();
@@ -1397,8 +1408,9 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     (unbound, shared): (Vec<String>, &[(usize, usize)]),
     reoriented: usize,
     (job, input): (&CurveJob, &crate::io::layout::Layout),
-    (progress, model): (&mut dyn FnMut(Progress), Option<&std::sync::Arc<crate::geometry::cad::CadModel>>),
+    (progress, cad): (&mut dyn FnMut(Progress), Option<(&std::sync::Arc<crate::geometry::cad::CadModel>, Vec<crate::app::cad::Bound>)>),
 ) -> Result<CurveReport, RunError> {
+    let (model, bound) = cad.map_or((None, Vec::new()), |(m, b)| (Some(m), b));
     let clock = Instant::now();
     let mut c = mesh.curve(parts, &job.options, progress)?;
     // a projection Gmsh failed answered with the point itself
@@ -1460,7 +1472,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
         dimension: D,
         cells: c.mesh.cells.len(),
         unbound_groups: unbound,
-        cad: model.map(|m| CadReport { model: m.file.display().to_string(), library: m.library.display().to_string(), gmsh_version: m.version.clone() }),
+        cad: model.map(|m| CadReport { model: m.file.display().to_string(), library: m.library.display().to_string(), gmsh_version: m.version.clone(), scale: m.scale, bound }),
         reoriented_cells: reoriented,
         quality: c.quality.clone(),
         periodic_snap: snapped,

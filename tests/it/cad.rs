@@ -71,7 +71,7 @@ fn curve_cad(dir: &Path, mesh: &Path, cad: Option<&Path>, geometry: Option<&str>
     });
     let tag = if cad.is_some() { "cad" } else { "geometry" };
     let output = dir.join(format!("{}_{tag}_p{p}.msh", mesh.file_stem().unwrap().to_string_lossy()));
-    let cad = cad.map(|m| CadSource { model: m.to_path_buf(), library: Some(common::gmsh_lib()) });
+    let cad = cad.map(|m| CadSource { model: m.to_path_buf(), library: Some(common::gmsh_lib()), scale: 1.0 });
     let job = CurveJob { input: mesh.to_path_buf(), geometry, cad, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300, force: false };
     curve_file(&job, |_| {}).map(|r| (r, output))
 }

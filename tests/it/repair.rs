@@ -18,7 +18,7 @@ fn curved(dir: &Path, kind: &str, size: &str, p: usize) -> (CurveReport, Value, 
     let peers: Value = serde_json::from_slice(&out).unwrap();
     let (mesh, step) = (dir.join(format!("{kind}.msh")), dir.join(format!("{kind}.step")));
     let output = dir.join(format!("{kind}_p{p}.msh"));
-    let cad = Some(CadSource { model: step.clone(), library: Some(common::gmsh_lib()) });
+    let cad = Some(CadSource { model: step.clone(), library: Some(common::gmsh_lib()), scale: 1.0 });
     let options = CurveOptions { order: p, snap_first: true, ..Default::default() };
     let job = CurveJob { input: mesh, geometry: None, cad, output: output.clone(), format: OutputFormat::Msh41, options, width: 300, force: false };
     let r = curve_file(&job, |_| {}).unwrap_or_else(|e| panic!("{kind} p = {p}: {e}"));

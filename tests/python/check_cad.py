@@ -23,7 +23,18 @@ judge() does the same for the mesh already in Gmsh's current model (used
 by cad_models.py for Gmsh's own curving); write_quietly(path) is
 gmsh.write without OpenCASCADE's STEP banner on standard output.
 
-Usage: check_cad.py MODEL MESH"""
+judge_by_geometry(MODEL, MESH) (--by-geometry) judges a mesh whose
+entities need not carry the model's tags (a mesh made in the session
+that built the model, or by another mesher): the mesh and the model are
+read into two models, each boundary element is found on the model's
+entity of its dimension nearest to its centre (of those whose trimmed
+face holds the centre's foot), and each boundary node is measured
+against the entity nearest to it: the face of its elements, the curve
+where elements on two faces meet (3D), the point where two curves meet
+(2D). Prints the same keys; "entities" lists {"dim", "tag", "nodes"}
+per model entity found nearest to some node.
+
+Usage: check_cad.py [--by-geometry] MODEL MESH"""
 import json
 import os
 import sys
@@ -126,10 +137,97 @@ def judge():
             "sample_distance": sample}
 
 
+def _nearest(dim, tags, pts, inside=False):
+    """Per point (n x 3), the nearest of entities (dim, tags) and the
+    distance; with `inside`, only entities whose trimming holds the foot
+    count, where any does."""
+    import numpy as np
+
+    d = np.full((len(tags), len(pts)), np.inf)
+    held = np.zeros((len(tags), len(pts)), dtype=bool)
+    for i, t in enumerate(tags):
+        if dim == 0:
+            foot = np.tile(gmsh.model.getValue(0, t, []), (len(pts), 1))
+        else:
+            foot = np.reshape(gmsh.model.getClosestPoint(dim, t, np.ravel(pts))[0], (-1, 3))
+        d[i] = np.linalg.norm(pts - foot, axis=1)
+        if inside:
+            # the candidates near enough to matter
+            for k in np.nonzero(d[i] <= 1e-6)[0]:
+                held[i, k] = gmsh.model.isInside(dim, t, list(foot[k])) > 0
+    if inside:
+        d = np.where(held | ~held.any(axis=0), d, np.inf)
+    k = d.argmin(axis=0)
+    return [tags[j] for j in k], d[k, np.arange(len(pts))]
+
+
+def judge_by_geometry(model_file, mesh_file):
+    import numpy as np
+
+    gmsh.open(mesh_file)
+    mesh_model = gmsh.model.getCurrent()
+    dim = max(d for d, _ in gmsh.model.getEntities() if len(_elements(d)) > 0)
+    tags = _elements(dim)
+    dj = np.array(gmsh.model.mesh.getElementQualities(tags, "minDetJac"))
+    sj = np.array(gmsh.model.mesh.getElementQualities(tags, "minSJ"))
+    x = _nodes()
+    # the boundary elements: their nodes, centres and sample points
+    facets, samples = [], []
+    types, _, enodes = gmsh.model.mesh.getElements(dim - 1)
+    for et, en in zip(types, enodes):
+        uvw = _samples(et)
+        bf = np.reshape(gmsh.model.mesh.getBasisFunctions(et, uvw, "Lagrange")[1], (len(uvw) // 3, -1))
+        nodes = np.reshape(en, (-1, bf.shape[1]))
+        centre = np.reshape(gmsh.model.mesh.getBasisFunctions(et, [0, 0, 0] if et in (1, 8, 26, 27, 28, 3, 10, 16, 36, 37) else [1 / 3, 1 / 3, 0], "Lagrange")[1], (1, -1))
+        for e in nodes:
+            facets.append((e, (centre @ x[e])[0]))
+        samples.append(np.einsum("qn,enc->eqc", bf, x[nodes]))
+    samples = np.concatenate(samples) if samples else np.zeros((0, 1, 3))
+    gmsh.model.add("cad")
+    gmsh.merge(model_file)
+    faces = [t for _, t in gmsh.model.getEntities(dim - 1)]
+    face, _ = _nearest(dim - 1, faces, np.array([c for _, c in facets]), inside=True)
+    on = {}
+    for (e, _), f in zip(facets, face):
+        for n in e:
+            on.setdefault(int(n), set()).add(f)
+    node_distance, worst, entities = {}, {}, {}
+    groups = {}
+    for n, fs in on.items():
+        key = (dim - 1, tuple(sorted(fs))[0]) if len(fs) == 1 else (dim - 2, None)
+        groups.setdefault(key, []).append(n)
+    for (d, f), ns in sorted(groups.items(), key=lambda g: (g[0][0], g[0][1] or 0)):
+        pts = x[ns]
+        if f is not None:
+            near, dist = [f] * len(ns), _distance(d, f, pts)
+        else:
+            near, dist = _nearest(d, [t for _, t in gmsh.model.getEntities(d)], pts)
+        for t in near:
+            entities[(d, t)] = entities.get((d, t), 0) + 1
+        k = int(np.argmax(dist))
+        if dist[k] >= node_distance.get(str(d), 0.0):
+            node_distance[str(d)] = float(dist[k])
+            worst[str(d)] = {"node": int(ns[k]), "entity": int(near[k]), "distance": float(dist[k])}
+    sample = 0.0
+    for f in set(face):
+        idx = [i for i, g in enumerate(face) if g == f]
+        if idx:
+            sample = max(sample, float(_distance(dim - 1, f, samples[idx].reshape(-1, 3)).max()))
+    gmsh.model.setCurrent(mesh_model)
+    return {"dim": dim, "elements": int(len(tags)), "invalid": int((dj <= 0).sum()), "min_det_jac": float(dj.min()),
+            "min_sj": float(sj.min()), "node_distance": node_distance, "worst": worst,
+            "entities": [{"dim": d, "tag": int(t), "nodes": c} for (d, t), c in sorted(entities.items())],
+            "sample_distance": {str(dim - 1): sample}}
+
+
 if __name__ == "__main__":
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.open(sys.argv[1])
-    gmsh.merge(sys.argv[2])
-    print(json.dumps(judge()))
+    args = [a for a in sys.argv[1:] if a != "--by-geometry"]
+    if "--by-geometry" in sys.argv:
+        print(json.dumps(judge_by_geometry(args[0], args[1])))
+    else:
+        gmsh.open(args[0])
+        gmsh.merge(args[1])
+        print(json.dumps(judge()))
     gmsh.finalize()

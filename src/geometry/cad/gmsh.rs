@@ -48,6 +48,7 @@ struct Api {
     get_second_derivative: EvalFn,
     get_normal: unsafe extern "C" fn(c_int, *const f64, usize, *mut *mut f64, *mut usize, ErrPtr),
     get_parametrization_bounds: unsafe extern "C" fn(c_int, c_int, *mut *mut f64, *mut usize, *mut *mut f64, *mut usize, ErrPtr),
+    is_inside: unsafe extern "C" fn(c_int, c_int, *const f64, usize, c_int, ErrPtr) -> c_int,
     last_error: unsafe extern "C" fn(*mut *mut c_char, ErrPtr),
 }
 
@@ -208,6 +209,7 @@ impl Session {
                 get_second_derivative: symbol(&lib, &path, "gmshModelGetSecondDerivative")?,
                 get_normal: symbol(&lib, &path, "gmshModelGetNormal")?,
                 get_parametrization_bounds: symbol(&lib, &path, "gmshModelGetParametrizationBounds")?,
+                is_inside: symbol(&lib, &path, "gmshModelIsInside")?,
                 last_error: symbol(&lib, &path, "gmshLoggerGetLastError")?,
             }
         };
@@ -269,8 +271,10 @@ impl Session {
         Ok(if p.is_null() { String::new() } else { self.take_string(p) })
     }
 
-    /// Reads `file` into a new model of its own; returns the model's name.
-    pub fn open(&mut self, file: &Path) -> Result<CString, CadError> {
+    /// Reads `file` into a new model of its own, its coordinates times
+    /// `scale` (Gmsh's `Geometry.OCCScaling`: STEP, IGES and BREP read by
+    /// OpenCASCADE); returns the model's name.
+    pub fn open(&mut self, file: &Path, scale: f64) -> Result<CString, CadError> {
         self.models += 1;
         let name = CString::new(format!("deformesh-cad-{}", self.models)).expect("no NUL");
         let path = CString::new(file.to_string_lossy().into_owned()).map_err(|_| CadError::Gmsh { call: "gmshMerge".into(), message: "the path has a NUL byte".into() })?;
@@ -281,9 +285,13 @@ impl Session {
         // OpenCASCADE prints its diagnostics to stdout, which is the
         // user's (a pipe of our figures): they go to stderr
         let _stdout = StdoutToStderr::begin();
+        self.set_option("Geometry.OCCScaling", scale)?;
         unsafe { (self.api.merge)(path.as_ptr(), &mut ierr) };
         drop(_stdout);
+        // the next model is read at its own scale
+        let reset = self.set_option("Geometry.OCCScaling", 1.0);
         self.check(ierr, "gmshMerge")?;
+        reset?;
         Ok(name)
     }
 
@@ -389,5 +397,15 @@ impl Session {
         unsafe { (self.api.get_normal)(tag, uv.as_ptr(), uv.len(), &mut p, &mut n, &mut ierr) };
         self.check(ierr, "gmshModelGetNormal")?;
         Ok(self.take(p, n))
+    }
+
+    /// How many of `points` (x, y, z each) lie on entity (dim, tag): for a
+    /// face, inside its trimming curves (a closest point on the untrimmed
+    /// surface may lie in a hole of the face).
+    pub fn count_inside(&self, dim: i32, tag: i32, points: &[f64]) -> Result<usize, CadError> {
+        let mut ierr = 0;
+        let n = unsafe { (self.api.is_inside)(dim, tag, points.as_ptr(), points.len(), 0, &mut ierr) };
+        self.check(ierr, "gmshModelIsInside")?;
+        Ok(n.max(0) as usize)
     }
 }

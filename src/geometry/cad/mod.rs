@@ -28,6 +28,7 @@
 //! failure ([`CadModel::failure`]), which the caller checks before it
 //! writes anything.
 
+pub mod classify;
 mod gmsh;
 
 use super::ClosestPoint;
@@ -140,6 +141,8 @@ pub struct CadModel {
     pub library: PathBuf,
     /// Its version.
     pub version: String,
+    /// The factor its coordinates were multiplied by on reading.
+    pub scale: f64,
     failure: Mutex<Option<CadError>>,
 }
 
@@ -147,9 +150,19 @@ impl CadModel {
     /// Reads `file` with Gmsh, loading the library (from `library`, else
     /// the search of [`gmsh`]) on first use.
     pub fn open(file: &Path, library: Option<&Path>) -> Result<Arc<CadModel>, CadError> {
+        CadModel::open_scaled(file, library, 1.0)
+    }
+
+    /// [`CadModel::open`], the model's coordinates times `scale` (a model
+    /// in other units than its mesh's): for STEP, IGES, BREP and XAO
+    /// files, which OpenCASCADE reads.
+    pub fn open_scaled(file: &Path, library: Option<&Path>, scale: f64) -> Result<Arc<CadModel>, CadError> {
         let ext = file.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
         if !MODEL_EXTENSIONS.contains(&ext.as_str()) {
             return Err(CadError::Extension { file: file.to_path_buf() });
+        }
+        if scale != 1.0 && ext.starts_with("geo") {
+            return Err(CadError::Library { why: format!("`{}`: a scale (--cad-scale) applies to STEP, IGES, BREP and XAO models, not to a .geo script: scale its points in the script", file.display()) });
         }
         let mut guard = gmsh::session(library)?;
         let s = guard.as_mut().expect("session loaded");
@@ -158,9 +171,9 @@ impl CadModel {
         // script: a `.Stp` is read through a link of a lower-case name
         let written = file.extension().and_then(|e| e.to_str()).unwrap_or_default();
         let link = (written != ext && !ext.starts_with("geo")).then(|| LowerCaseLink::new(file, &ext)).transpose()?;
-        let name = s.open(link.as_ref().map_or(file, |l| l.path.as_path()))?;
+        let name = s.open(link.as_ref().map_or(file, |l| l.path.as_path()), scale)?;
         drop(link);
-        Ok(Arc::new(CadModel { name, file: file.to_path_buf(), library: s.path.clone(), version: s.version.clone(), failure: Mutex::new(None) }))
+        Ok(Arc::new(CadModel { name, file: file.to_path_buf(), library: s.path.clone(), version: s.version.clone(), scale, failure: Mutex::new(None) }))
     }
 
     /// Runs `f` on the session with this model current.
@@ -191,6 +204,37 @@ impl CadModel {
     pub fn point(&self, tag: i32) -> Result<[f64; 3], CadError> {
         let v = self.with(|s| s.value(0, tag, &[]))?;
         Ok([v.first().copied().unwrap_or(f64::NAN), v.get(1).copied().unwrap_or(f64::NAN), v.get(2).copied().unwrap_or(f64::NAN)])
+    }
+
+    /// The bounding box `[min, max]` of entity (dim, tag); of the whole
+    /// model for (-1, -1).
+    pub fn bounding_box(&self, dim: i32, tag: i32) -> Result<[[f64; 3]; 2], CadError> {
+        self.with(|s| s.bounding_box(dim, tag))
+    }
+
+    /// The closest points of entity (dim, tag) to `points`, in one call
+    /// (an untrimmed surface's: see [`CadModel::count_inside`]).
+    pub fn closest_points(&self, dim: usize, tag: i32, points: &[[f64; 3]]) -> Result<Vec<[f64; 3]>, CadError> {
+        let flat: Vec<f64> = points.iter().flatten().copied().collect();
+        let (x, _) = self.with(|s| s.closest(dim as i32, tag, &flat))?;
+        Ok(x.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// How many of `points` lie on entity (dim, tag), a face's trimming
+    /// (its holes, its outline) heeded.
+    pub fn count_inside(&self, dim: usize, tag: i32, points: &[[f64; 3]]) -> Result<usize, CadError> {
+        let flat: Vec<f64> = points.iter().flatten().copied().collect();
+        self.with(|s| s.count_inside(dim as i32, tag, &flat))
+    }
+
+    /// `n` points of curve `tag`, evenly spaced in its parameter.
+    pub fn curve_points(&self, tag: i32, n: usize) -> Result<Vec<[f64; 3]>, CadError> {
+        self.with(|s| {
+            let (lo, hi) = s.parameter_bounds(1, tag)?;
+            let (a, b) = (lo.first().copied().unwrap_or(0.0), hi.first().copied().unwrap_or(1.0));
+            let t: Vec<f64> = (0..n).map(|k| a + (b - a) * k as f64 / (n.max(2) - 1) as f64).collect();
+            Ok(s.value(1, tag, &t)?.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        })
     }
 
     /// Entity (dim, tag) as a shape: dim 1 a curve, 2 a surface.
