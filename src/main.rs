@@ -151,15 +151,16 @@ enum Command {
         /// The linear mesh: triangles, quads, or both; tetrahedra, hexes, prisms, pyramids, alone or mixed (Gmsh MSH 4.1, ASCII or binary, or MSH 2.2).
         mesh: PathBuf,
         /// The CAD model the mesh was made from (.step/.stp, .iges/.igs,
-        /// .brep, .xao, .geo): every boundary entity is curved onto the
-        /// model's entity with its tag. Loads Gmsh's library (GPL-2+) at
+        /// .brep, .xao, .geo): each boundary element is curved onto the
+        /// model's entity it lies on, found by geometry (the mesh's entity
+        /// tags need not be the model's). Loads Gmsh's library (GPL-2+) at
         /// run time: DEFORMESH_GMSH_LIB, else the Python `gmsh` package
         /// (`pip install gmsh`), else the system's.
         #[arg(long)]
         cad: Option<PathBuf>,
         /// Multiply the CAD model's coordinates by this factor: 1000 for a
         /// mesh in millimetres made from a model in metres, 0.001 for the
-        /// reverse (STEP, IGES, BREP and XAO models).
+        /// reverse (STEP, IGES and BREP models).
         #[arg(long, default_value_t = 1.0, requires = "cad")]
         cad_scale: f64,
         /// The geometry file (TOML `[[group]]` tables: name, kind, shape);
@@ -466,7 +467,7 @@ fn blame_cad(e: RunError, input: &str, cad: Option<&Path>) -> anyhow::Error {
     use deformesh::geometry::cad::CadError;
     match (e, cad) {
         // these name their own file, or none
-        (e @ RunError::Cad(CadError::Absent { .. } | CadError::Library { .. } | CadError::Extension { .. }), _) => e.into(),
+        (e @ RunError::Cad(CadError::Absent { .. } | CadError::Library { .. } | CadError::Extension { .. } | CadError::Unscalable { .. }), _) => e.into(),
         (RunError::Read { path, cause }, Some(model)) if path == model => RunError::Read { path, cause }.into(),
         (e @ RunError::Cad(_), Some(model)) => anyhow::Error::from(e).context(model.display().to_string()),
         (e, _) => blame(e, input),

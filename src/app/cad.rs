@@ -91,17 +91,32 @@ pub fn bind<const D: usize>(
     tolerance: f64,
 ) -> Result<CadParts<D>, CaseError> {
     let file = model.file.display().to_string();
-    let err = |message: String| CaseError { file: file.clone(), message };
+    let err = |message: String| CaseError {
+        file: file.clone(),
+        message,
+    };
     let gmsh = |e: crate::geometry::cad::CadError| err(e.to_string());
     let kind_word = if D == 2 { "curve" } else { "surface" };
     let mesh = MeshFacets::new(layout, facets, D - 1);
     let lifted: Vec<[f64; 3]> = nodes.iter().map(|&p| lift(p)).collect();
     let tol = tolerances(&mesh.facets, &lifted, tolerance);
-    let boundary = Boundary { nodes: &lifted, tolerance: &tol, facets: &mesh.facets };
+    let boundary = Boundary {
+        nodes: &lifted,
+        tolerance: &tol,
+        facets: &mesh.facets,
+    };
     let on = match classify::classify(model, D - 1, boundary, &mesh.entities()) {
         Ok(on) => on,
         Err(ClassifyError::Cad(e)) => return Err(gmsh(e)),
-        Err(ClassifyError::Off(off)) => return Err(err(refusal(model, &mesh, (layout, boundary), (&off, tolerance), names))),
+        Err(ClassifyError::Off(off)) => {
+            return Err(err(refusal(
+                model,
+                &mesh,
+                (layout, boundary),
+                (&off, tolerance),
+                names,
+            )))
+        }
     };
     let overrides = match geometry {
         Some((g, gfile)) => Some(g.parts::<D>(names, gfile)?),
@@ -111,7 +126,12 @@ pub fn bind<const D: usize>(
     let mut keys: BTreeMap<(i32, Option<usize>), usize> = BTreeMap::new();
     let mut part_of = Vec::with_capacity(on.len());
     for (f, o) in on.iter().enumerate() {
-        let bound = overridden(&overrides, &mesh.groups[f], names).map_err(|m| err(format!("the mesh's {}: {m}", mesh.entity_name(f, kind_word))))?;
+        let bound = overridden(&overrides, &mesh.groups[f], names).map_err(|m| {
+            err(format!(
+                "the mesh's {}: {m}",
+                mesh.entity_name(f, kind_word)
+            ))
+        })?;
         let n = keys.len();
         part_of.push(*keys.entry((o.tag, bound)).or_insert(n));
     }
@@ -125,7 +145,11 @@ pub fn bind<const D: usize>(
             Some(PartKind::Slip { wall: None }) if !flat => PartKind::Slip { wall: Some(shape) },
             Some(kind) => kind,
             None if flat => PartKind::Slip { wall: None },
-            None => PartKind::Move { target: shape, correspondence: Correspondence::Normal, mode: MoveMode::Sliding },
+            None => PartKind::Move {
+                target: shape,
+                correspondence: Correspondence::Normal,
+                mode: MoveMode::Sliding,
+            },
         };
         let name = match group {
             Some(g) => format!("{kind_word} {tag} (group `{}`)", names[g]),
@@ -133,7 +157,10 @@ pub fn bind<const D: usize>(
         };
         parts[i] = Some(BoundaryPart::new(name, kind));
     }
-    let mut parts: Vec<BoundaryPart<D>> = parts.into_iter().map(|p| p.expect("every key has a part")).collect();
+    let mut parts: Vec<BoundaryPart<D>> = parts
+        .into_iter()
+        .map(|p| p.expect("every key has a part"))
+        .collect();
     let tags: Vec<i32> = {
         let mut t = vec![0; keys.len()];
         for (&(tag, _), &i) in &keys {
@@ -149,14 +176,23 @@ pub fn bind<const D: usize>(
     } else {
         onto.extend(at_corners(model, &at, boundary).map_err(gmsh)?);
     }
-    let onto = onto.into_iter().map(|(n, p)| (n, std::array::from_fn(|k| p[k]))).collect();
+    let onto = onto
+        .into_iter()
+        .map(|(n, p)| (n, std::array::from_fn(|k| p[k])))
+        .collect();
     if let Some(e) = model.failure() {
         return Err(gmsh(e));
     }
     let bound = mesh.bound(&on, names, kind_word);
     let names: Vec<String> = parts.iter().map(|p| p.name.clone()).collect();
     let facets = mesh.facets.into_iter().zip(part_of).collect();
-    Ok(CadParts { facets, parts, names, bound, onto })
+    Ok(CadParts {
+        facets,
+        parts,
+        names,
+        bound,
+        onto,
+    })
 }
 
 fn lift<const D: usize>(p: [f64; D]) -> [f64; 3] {
@@ -175,7 +211,10 @@ fn tolerances(facets: &[Vec<usize>], nodes: &[[f64; 3]], tolerance: f64) -> Vec<
             shortest[b] = shortest[b].min(l);
         }
     }
-    shortest.into_iter().map(|l| if l.is_finite() { tolerance * l } else { 0.0 }).collect()
+    shortest
+        .into_iter()
+        .map(|l| if l.is_finite() { tolerance * l } else { 0.0 })
+        .collect()
 }
 
 /// The mesh's boundary facets, each once, with the groups each is in and
@@ -193,9 +232,18 @@ impl MeshFacets {
             k.sort_unstable();
             k
         };
-        let entity_of: HashMap<Vec<usize>, i64> = layout.elements.iter().filter(|e| e.shape.dim() == dim).map(|e| (key(&e.nodes), e.entity)).collect();
+        let entity_of: HashMap<Vec<usize>, i64> = layout
+            .elements
+            .iter()
+            .filter(|e| e.shape.dim() == dim)
+            .map(|e| (key(&e.nodes), e.entity))
+            .collect();
         let mut index: HashMap<Vec<usize>, usize> = HashMap::new();
-        let mut m = MeshFacets { facets: Vec::new(), groups: Vec::new(), entity: Vec::new() };
+        let mut m = MeshFacets {
+            facets: Vec::new(),
+            groups: Vec::new(),
+            entity: Vec::new(),
+        };
         for (nodes, part) in facets {
             let k = key(nodes);
             let i = *index.entry(k.clone()).or_insert_with(|| {
@@ -217,7 +265,12 @@ impl MeshFacets {
         for (f, e) in self.entity.iter().enumerate() {
             by.entry(*e).or_default().push(f);
         }
-        by.into_iter().map(|(e, facets)| MeshEntity { facets, guess: e.and_then(|t| i32::try_from(t).ok()) }).collect()
+        by.into_iter()
+            .map(|(e, facets)| MeshEntity {
+                facets,
+                guess: e.and_then(|t| i32::try_from(t).ok()),
+            })
+            .collect()
     }
 
     fn entity_name(&self, f: usize, kind_word: &str) -> String {
@@ -235,20 +288,30 @@ impl MeshFacets {
                 let mut model: BTreeMap<String, usize> = BTreeMap::new();
                 let mut groups: Vec<String> = Vec::new();
                 for &f in &e.facets {
-                    *model.entry(format!("{kind_word} {}", on[f].tag)).or_default() += 1;
+                    *model
+                        .entry(format!("{kind_word} {}", on[f].tag))
+                        .or_default() += 1;
                     for &g in &self.groups[f] {
                         if !groups.contains(&names[g]) {
                             groups.push(names[g].clone());
                         }
                     }
                 }
-                let by_tag = e.guess.is_some_and(|t| e.facets.iter().all(|&f| on[f].tag == t));
+                let by_tag = e
+                    .guess
+                    .is_some_and(|t| e.facets.iter().all(|&f| on[f].tag == t));
                 let max_distance = e.facets.iter().map(|&f| on[f].distance).fold(0.0, f64::max);
                 let mesh = match self.entity[e.facets[0]] {
                     Some(t) => format!("{kind_word} {t}"),
                     None => "none".into(),
                 };
-                Bound { mesh, groups, model, by_tag, max_distance }
+                Bound {
+                    mesh,
+                    groups,
+                    model,
+                    by_tag,
+                    max_distance,
+                }
             })
             .collect()
     }
@@ -257,25 +320,45 @@ impl MeshFacets {
 /// The message for a facet on no entity of the model: the unit mistake
 /// when the boxes say so, else the mesh's entity, the node, the nearest
 /// model entity and the distance.
-fn refusal(model: &CadModel, mesh: &MeshFacets, (layout, b): (&Layout, Boundary), (off, tolerance): (&classify::Off, f64), names: &[String]) -> String {
-    let dim = b.facets.first().map_or(1, |f| if f.len() == 2 { 1 } else { 2 });
+fn refusal(
+    model: &CadModel,
+    mesh: &MeshFacets,
+    (layout, b): (&Layout, Boundary),
+    (off, tolerance): (&classify::Off, f64),
+    names: &[String],
+) -> String {
+    let dim = b
+        .facets
+        .first()
+        .map_or(1, |f| if f.len() == 2 { 1 } else { 2 });
     let kind_word = ["point", "curve", "surface"][dim];
     let ours = classify::bounds(b.facets.iter().flatten().map(|&n| b.nodes[n]));
     if let Ok(theirs) = model.bounding_box(-1, -1) {
         if let Some(s) = classify::scale_between(ours, theirs) {
-            let box_text = |x: [[f64; 3]; 2]| format!("({:.4e}, {:.4e}, {:.4e}) to ({:.4e}, {:.4e}, {:.4e})", x[0][0], x[0][1], x[0][2], x[1][0], x[1][1], x[1][2]);
+            let box_text = |x: [[f64; 3]; 2]| {
+                format!(
+                    "({:.4e}, {:.4e}, {:.4e}) to ({:.4e}, {:.4e}, {:.4e})",
+                    x[0][0], x[0][1], x[0][2], x[1][0], x[1][1], x[1][2]
+                )
+            };
             let (factor, units) = match classify::unit_factor(s) {
-                Some((f, a, m)) => (f, format!(": the mesh is likely in {a} and the model in {m}")),
-                None => (s, String::new()),
+                Some((f, a, m)) => (
+                    format!("{f}"),
+                    format!(": the mesh is likely in {a} and the model in {m}"),
+                ),
+                None => (format!("{s:.4}"), String::new()),
             };
             return format!(
-                "the mesh's boundary is the model scaled by {factor:.6} (its bounding box {} against the model's {}){units}. Give --cad-scale {factor} to read the model in the mesh's units",
+                "the mesh's boundary is the model scaled by {factor} (its bounding box {} against the model's {}){units}. Give --cad-scale {factor} to read the model in the mesh's units",
                 box_text(ours),
                 box_text(theirs)
             );
         }
     }
-    let groups: Vec<&str> = mesh.groups[off.facet].iter().map(|&g| names[g].as_str()).collect();
+    let groups: Vec<&str> = mesh.groups[off.facet]
+        .iter()
+        .map(|&g| names[g].as_str())
+        .collect();
     let nearest = match off.nearest {
         Some(t) => format!("the nearest of the model's {kind_word}s ({kind_word} {t})"),
         None => format!("every {kind_word} of the model (Gmsh could not project it)"),
@@ -298,9 +381,19 @@ fn refusal(model: &CadModel, mesh: &MeshFacets, (layout, b): (&Layout, Boundary)
 
 /// The group of `of` (of `names`) the geometry file binds, if any; two
 /// bound groups are refused.
-fn overridden<const D: usize>(overrides: &Option<(Vec<BoundaryPart<D>>, Vec<String>)>, of: &[usize], names: &[String]) -> Result<Option<usize>, String> {
-    let Some((_, unbound)) = overrides else { return Ok(None) };
-    let bound: Vec<usize> = of.iter().copied().filter(|&g| !unbound.contains(&names[g])).collect();
+fn overridden<const D: usize>(
+    overrides: &Option<(Vec<BoundaryPart<D>>, Vec<String>)>,
+    of: &[usize],
+    names: &[String],
+) -> Result<Option<usize>, String> {
+    let Some((_, unbound)) = overrides else {
+        return Ok(None);
+    };
+    let bound: Vec<usize> = of
+        .iter()
+        .copied()
+        .filter(|&g| !unbound.contains(&names[g]))
+        .collect();
     match bound.as_slice() {
         [] => Ok(None),
         [g] => Ok(Some(*g)),
@@ -331,8 +424,18 @@ fn where_faces_meet(mesh: &MeshFacets, part_of: &[usize], tags: &[i32]) -> Vec<(
 
 /// The feet on their model entity of the nodes on one only (not in
 /// `at`), where the foot is within the node's tolerance.
-fn on_faces(model: &Arc<CadModel>, mesh: &MeshFacets, (part_of, tags): (&[usize], &[i32]), at: &[(usize, Vec<i32>)], b: Boundary) -> Vec<(usize, [f64; 3])> {
-    let dim = if mesh.facets.first().is_some_and(|f| f.len() == 2) { 1 } else { 2 };
+fn on_faces(
+    model: &Arc<CadModel>,
+    mesh: &MeshFacets,
+    (part_of, tags): (&[usize], &[i32]),
+    at: &[(usize, Vec<i32>)],
+    b: Boundary,
+) -> Vec<(usize, [f64; 3])> {
+    let dim = if mesh.facets.first().is_some_and(|f| f.len() == 2) {
+        1
+    } else {
+        2
+    };
     let several: std::collections::HashSet<usize> = at.iter().map(|a| a.0).collect();
     let mut seen = vec![false; b.nodes.len()];
     let mut shapes: HashMap<i32, crate::geometry::cad::CadShape> = HashMap::new();
@@ -355,7 +458,11 @@ fn on_faces(model: &Arc<CadModel>, mesh: &MeshFacets, (part_of, tags): (&[usize]
 
 /// In 2D, the model's point two curves share, for a node on both
 /// (within its tolerance).
-fn at_corners(model: &CadModel, at: &[(usize, Vec<i32>)], b: Boundary) -> Result<Vec<(usize, [f64; 3])>, crate::geometry::cad::CadError> {
+fn at_corners(
+    model: &CadModel,
+    at: &[(usize, Vec<i32>)],
+    b: Boundary,
+) -> Result<Vec<(usize, [f64; 3])>, crate::geometry::cad::CadError> {
     let mut out = Vec::new();
     for (n, on) in at {
         let mut ends: Vec<i32> = Vec::new();
@@ -380,8 +487,19 @@ fn at_corners(model: &CadModel, at: &[(usize, Vec<i32>)], b: Boundary) -> Result
 /// Records, for every two parts whose surfaces (model tags `tags`) meet
 /// in the mesh (`at`), the model's curves they meet along
 /// ([`BoundaryPart::meets`]); returns those curves per pair of surfaces.
-fn meetings<const D: usize>(model: &Arc<CadModel>, tags: &[i32], at: &[(usize, Vec<i32>)], parts: &mut [BoundaryPart<D>]) -> Result<HashMap<(i32, i32), Vec<i32>>, crate::geometry::cad::CadError> {
-    let mut pairs: Vec<(i32, i32)> = at.iter().flat_map(|(_, on)| on.iter().flat_map(move |&a| on.iter().filter(move |&&b| a < b).map(move |&b| (a, b)))).collect();
+fn meetings<const D: usize>(
+    model: &Arc<CadModel>,
+    tags: &[i32],
+    at: &[(usize, Vec<i32>)],
+    parts: &mut [BoundaryPart<D>],
+) -> Result<HashMap<(i32, i32), Vec<i32>>, crate::geometry::cad::CadError> {
+    let mut pairs: Vec<(i32, i32)> = at
+        .iter()
+        .flat_map(|(_, on)| {
+            on.iter()
+                .flat_map(move |&a| on.iter().filter(move |&&b| a < b).map(move |&b| (a, b)))
+        })
+        .collect();
     pairs.sort_unstable();
     pairs.dedup();
     let mut curves: Curves = HashMap::new();
@@ -392,7 +510,11 @@ fn meetings<const D: usize>(model: &Arc<CadModel>, tags: &[i32], at: &[(usize, V
     }
     let mut along: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
     for &(a, b) in &pairs {
-        let mut shared: Vec<i32> = curves[&a].iter().copied().filter(|c| curves[&b].contains(c)).collect();
+        let mut shared: Vec<i32> = curves[&a]
+            .iter()
+            .copied()
+            .filter(|c| curves[&b].contains(c))
+            .collect();
         if shared.is_empty() {
             // faces of solids not glued (a STEP of touching blocks) each
             // have their own copy of the curve they meet along
@@ -409,8 +531,16 @@ fn meetings<const D: usize>(model: &Arc<CadModel>, tags: &[i32], at: &[(usize, V
     for i in 0..tags.len() {
         for j in 0..tags.len() {
             let key = (tags[i].min(tags[j]), tags[i].max(tags[j]));
-            if let Some(c) = along.get(&key).filter(|c| tags[i] != tags[j] && !c.is_empty()) {
-                parts[i].meets.push((j, c.iter().map(|&c| Arc::new(model.shape(1, c)) as Arc<dyn ClosestPoint<D>>).collect()));
+            if let Some(c) = along
+                .get(&key)
+                .filter(|c| tags[i] != tags[j] && !c.is_empty())
+            {
+                parts[i].meets.push((
+                    j,
+                    c.iter()
+                        .map(|&c| Arc::new(model.shape(1, c)) as Arc<dyn ClosestPoint<D>>)
+                        .collect(),
+                ));
             }
         }
     }
@@ -422,19 +552,36 @@ fn meetings<const D: usize>(model: &Arc<CadModel>, tags: &[i32], at: &[(usize, V
 fn lies_on(model: &CadModel, c: i32, s: i32) -> Result<bool, crate::geometry::cad::CadError> {
     let pts = model.curve_points(c, 9)?;
     let size = classify::bounds(pts.iter().copied());
-    let tol = 1e-9 * crate::numeric::dist2(size[0], size[1]).sqrt().max(f64::MIN_POSITIVE);
+    let tol = 1e-9
+        * crate::numeric::dist2(size[0], size[1])
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
     let feet = model.closest_points(2, s, &pts)?;
-    Ok(feet.len() == pts.len() && pts.iter().zip(&feet).all(|(p, q)| crate::numeric::dist2(*p, *q).sqrt() <= tol) && model.count_inside(2, s, &feet)? == pts.len())
+    Ok(feet.len() == pts.len()
+        && pts
+            .iter()
+            .zip(&feet)
+            .all(|(p, q)| crate::numeric::dist2(*p, *q).sqrt() <= tol)
+        && model.count_inside(2, s, &feet)? == pts.len())
 }
 
 /// Every node where facets on two of the model's surfaces meet lies on a
 /// curve the two share, within its tolerance: there the new nodes go onto
 /// that curve. The first that does not is named.
-fn check_meetings(model: &Arc<CadModel>, at: &[(usize, Vec<i32>)], (layout, b): (&Layout, Boundary), along: &HashMap<(i32, i32), Vec<i32>>) -> Result<Vec<(usize, [f64; 3])>, String> {
+fn check_meetings(
+    model: &Arc<CadModel>,
+    at: &[(usize, Vec<i32>)],
+    (layout, b): (&Layout, Boundary),
+    along: &HashMap<(i32, i32), Vec<i32>>,
+) -> Result<Vec<(usize, [f64; 3])>, String> {
     let mut onto = Vec::new();
     for (n, on) in at {
         let n = *n;
-        let shared: Vec<i32> = on.iter().flat_map(|&a| on.iter().filter(move |&&x| a < x).map(move |&x| (a, x))).flat_map(|k| along.get(&k).cloned().unwrap_or_default()).collect();
+        let shared: Vec<i32> = on
+            .iter()
+            .flat_map(|&a| on.iter().filter(move |&&x| a < x).map(move |&x| (a, x)))
+            .flat_map(|k| along.get(&k).cloned().unwrap_or_default())
+            .collect();
         let mut best: Option<(f64, [f64; 3], i32)> = None;
         for &c in &shared {
             let shape = model.shape(1, c);
@@ -448,7 +595,10 @@ fn check_meetings(model: &Arc<CadModel>, at: &[(usize, Vec<i32>)], (layout, b): 
             Some((d, q, c)) if d <= b.tolerance[n] => {
                 // a corner: the curve's end point, if the node is at it
                 let ends = model.boundary(1, c).map_err(|e| e.to_string())?;
-                let corner = ends.iter().filter_map(|&e| model.point(e).ok()).find(|p| crate::numeric::dist2(*p, b.nodes[n]).sqrt() <= b.tolerance[n]);
+                let corner = ends
+                    .iter()
+                    .filter_map(|&e| model.point(e).ok())
+                    .find(|p| crate::numeric::dist2(*p, b.nodes[n]).sqrt() <= b.tolerance[n]);
                 onto.push((n, if on.len() > 2 { corner.unwrap_or(q) } else { q }));
             }
             _ => {
@@ -457,7 +607,11 @@ fn check_meetings(model: &Arc<CadModel>, at: &[(usize, Vec<i32>)], (layout, b): 
                     None => "which share no curve in the model".to_string(),
                     Some((d, _, _)) => format!("but it lies {d:.3e} from the curves they share, more than its tolerance {:.3e}", b.tolerance[n]),
                 };
-                return Err(format!("node {} of the mesh is where its facets on the model's {} meet, {why}", layout.node_tags[n], list.join(" and ")));
+                return Err(format!(
+                    "node {} of the mesh is where its facets on the model's {} meet, {why}",
+                    layout.node_tags[n],
+                    list.join(" and ")
+                ));
             }
         }
     }

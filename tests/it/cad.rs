@@ -11,12 +11,20 @@ use deformesh::geometry::ClosestPoint;
 /// of tests/python/cad_primitives.py, read back from their STEP file.
 fn primitives(dir: &std::path::Path) -> std::sync::Arc<CadModel> {
     let step = dir.join("primitives.step");
-    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("shapes"), step.as_os_str()]);
+    common::run_script(
+        "cad_primitives.py",
+        &[std::ffi::OsStr::new("shapes"), step.as_os_str()],
+    );
     CadModel::open(&step, Some(&common::gmsh_lib())).unwrap()
 }
 
 fn surface_of_type(model: &std::sync::Arc<CadModel>, ty: &str) -> CadShape {
-    let tag = model.entities(2).unwrap().into_iter().find(|&t| model.entity_type(2, t).unwrap() == ty).unwrap_or_else(|| panic!("no {ty}"));
+    let tag = model
+        .entities(2)
+        .unwrap()
+        .into_iter()
+        .find(|&t| model.entity_type(2, t).unwrap() == ty)
+        .unwrap_or_else(|| panic!("no {ty}"));
     model.shape(2, tag)
 }
 
@@ -36,15 +44,24 @@ fn step_surfaces_answer_as_the_exact_shapes() {
         worst[0] = worst[0].max(deformesh::numeric::dist2(q, exact).sqrt());
         let n = ClosestPoint::<3>::normal(&cylinder, p);
         worst[1] = worst[1].max(1.0 - (n[0] * a.cos() + n[1] * a.sin()).abs());
-        let s = [2.0 + r * a.cos(), 0.0 + r * a.sin() * (0.5 * a).cos(), 0.5 + r * a.sin() * (0.5 * a).sin()];
+        let s = [
+            2.0 + r * a.cos(),
+            0.0 + r * a.sin() * (0.5 * a).cos(),
+            0.5 + r * a.sin() * (0.5 * a).sin(),
+        ];
         let d = ClosestPoint::<3>::distance(&sphere, s);
         worst[2] = worst[2].max((d - (r - 0.3).abs()).abs());
     }
     assert!(model.failure().is_none(), "{:?}", model.failure());
-    assert!(worst[0] < 1e-12 && worst[1] < 1e-12 && worst[2] < 1e-12, "closest point, normal, sphere distance: {worst:?}");
+    assert!(
+        worst[0] < 1e-12 && worst[1] < 1e-12 && worst[2] < 1e-12,
+        "closest point, normal, sphere distance: {worst:?}"
+    );
 }
 
-use deformesh::app::driver::{curve_file, CadSource, CurveJob, CurveReport, OutputFormat, RunError};
+use deformesh::app::driver::{
+    curve_file, CadSource, CurveJob, CurveReport, OutputFormat, RunError,
+};
 use deformesh::highorder::curve::CurveOptions;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -57,29 +74,66 @@ fn model(dir: &Path, kind: &str, args: &[&str]) -> (PathBuf, PathBuf, Option<Val
     let mut all = vec![kind.to_string(), dir.display().to_string()];
     all.extend(args.iter().map(|s| s.to_string()));
     let out = common::run_script("cad_models.py", &all);
-    let peers = (!out.is_empty()).then(|| serde_json::from_slice(&out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out))));
-    let ext = if kind == "wing" { "brep" } else { "step" };
-    (dir.join(format!("{kind}.msh")), dir.join(format!("{kind}.{ext}")), peers)
+    let peers = (!out.is_empty()).then(|| {
+        serde_json::from_slice(&out)
+            .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out)))
+    });
+    let ext = if kind == "wing" && !args.contains(&"--renumber") {
+        "brep"
+    } else {
+        "step"
+    };
+    (
+        dir.join(format!("{kind}.msh")),
+        dir.join(format!("{kind}.{ext}")),
+        peers,
+    )
 }
 
 /// `curve MESH --cad MODEL` at order p (a geometry file too if given).
-fn curve_cad(dir: &Path, mesh: &Path, cad: Option<&Path>, geometry: Option<&str>, p: usize) -> Result<(CurveReport, PathBuf), RunError> {
+fn curve_cad(
+    dir: &Path,
+    mesh: &Path,
+    cad: Option<&Path>,
+    geometry: Option<&str>,
+    p: usize,
+) -> Result<(CurveReport, PathBuf), RunError> {
     let geometry = geometry.map(|text| {
         let g = dir.join("geometry.toml");
         std::fs::write(&g, text).unwrap();
         g
     });
     let tag = if cad.is_some() { "cad" } else { "geometry" };
-    let output = dir.join(format!("{}_{tag}_p{p}.msh", mesh.file_stem().unwrap().to_string_lossy()));
-    let cad = cad.map(|m| CadSource { model: m.to_path_buf(), library: Some(common::gmsh_lib()), scale: 1.0 });
-    let job = CurveJob { input: mesh.to_path_buf(), geometry, cad, output: output.clone(), format: OutputFormat::Msh41, options: CurveOptions { order: p, ..Default::default() }, width: 300, force: false };
+    let output = dir.join(format!(
+        "{}_{tag}_p{p}.msh",
+        mesh.file_stem().unwrap().to_string_lossy()
+    ));
+    let cad = cad.map(|m| CadSource {
+        model: m.to_path_buf(),
+        library: Some(common::gmsh_lib()),
+        scale: 1.0,
+    });
+    let job = CurveJob {
+        input: mesh.to_path_buf(),
+        geometry,
+        cad,
+        output: output.clone(),
+        format: OutputFormat::Msh41,
+        options: CurveOptions {
+            order: p,
+            ..Default::default()
+        },
+        width: 300,
+        force: false,
+    };
     curve_file(&job, |_| {}).map(|r| (r, output))
 }
 
-/// tests/python/check_cad.py: the real Gmsh opens `step`, merges `mesh`
-/// and measures it against the CAD.
+/// tests/python/check_cad.py --by-geometry: the real Gmsh reads `step`
+/// and `mesh` into two models and measures each boundary node against
+/// the model's entity nearest to it (not by tag).
 fn judged(step: &Path, mesh: &Path) -> Value {
-    let out = common::run_script("check_cad.py", &[step, mesh]);
+    let out = common::run_script("check_cad.py", &[Path::new("--by-geometry"), step, mesh]);
     serde_json::from_slice(&out).unwrap()
 }
 
@@ -91,24 +145,41 @@ fn judged(step: &Path, mesh: &Path) -> Value {
 fn on_its_cad(step: &Path, out: &Path, r: &CurveReport, peer: f64) -> Value {
     assert!(r.quality.invalid_elements.is_empty());
     let g = judged(step, out);
-    assert_eq!(g["invalid"].as_u64(), Some(0), "Gmsh finds invalid elements: {g}");
+    assert_eq!(
+        g["invalid"].as_u64(),
+        Some(0),
+        "Gmsh finds invalid elements: {g}"
+    );
     assert!(g["min_det_jac"].as_f64().unwrap() > 0.0, "{g}");
     for dim in ["0", "1", "2"] {
         let d = g["node_distance"][dim].as_f64().unwrap_or(0.0);
-        assert!(d <= 1e-10, "nodes of dimension {dim} are {d:e} off their CAD entity: {}", g["worst"][dim]);
+        assert!(
+            d <= 1e-10,
+            "nodes of dimension {dim} are {d:e} off their CAD entity: {}",
+            g["worst"][dim]
+        );
     }
     let ours = r.quality.boundary_sample_distance;
     let boundary = (r.dimension - 1).to_string();
     let theirs = g["sample_distance"][&boundary].as_f64().unwrap();
-    assert!((ours - theirs).abs() <= 0.05 * theirs + 1e-14, "our sampled boundary error {ours:e}, Gmsh's measure of it {theirs:e}");
-    assert!(ours <= 2.0 * peer, "boundary error {ours:e} against Gmsh setOrder's {peer:e}");
+    assert!(
+        (ours - theirs).abs() <= 0.05 * theirs + 1e-14,
+        "our sampled boundary error {ours:e}, Gmsh's measure of it {theirs:e}"
+    );
+    assert!(
+        ours <= 2.0 * peer,
+        "boundary error {ours:e} against Gmsh setOrder's {peer:e}"
+    );
     g
 }
 
 /// Gmsh's `setOrder` figures from `--peers`.
 fn setorder(peers: &Option<Value>) -> (u64, f64) {
     let s = &peers.as_ref().expect("--peers printed")["setorder"];
-    (s["invalid"].as_u64().unwrap(), s["boundary_sample_distance"].as_f64().unwrap())
+    (
+        s["invalid"].as_u64().unwrap(),
+        s["boundary_sample_distance"].as_f64().unwrap(),
+    )
 }
 
 #[test]
@@ -121,32 +192,66 @@ fn a_naca_section_with_a_boundary_layer_is_curved_onto_its_step() {
 fn curved_at_p2_p3(kind: &str, more: impl Fn(&Value, usize)) {
     let dir = tempfile::tempdir().unwrap();
     for p in [2, 3] {
-        let (mesh, model_file, peers) = model(dir.path(), kind, &["--peers", &p.to_string()]);
+        // meshed in the session that built the model, as the Gmsh
+        // tutorials do: bound to the STEP by geometry, not by tag
+        let (mesh, model_file, peers) =
+            model(dir.path(), kind, &["--renumber", "--peers", &p.to_string()]);
         let (invalid, peer) = setorder(&peers);
-        let (r, out) = curve_cad(dir.path(), &mesh, Some(&model_file), None, p).unwrap_or_else(|e| panic!("p = {p}: {e}"));
+        let (r, out) = curve_cad(dir.path(), &mesh, Some(&model_file), None, p)
+            .unwrap_or_else(|e| panic!("p = {p}: {e}"));
         more(&on_its_cad(&model_file, &out, &r, peer), p);
         let cad = r.cad.as_ref().expect("the report names the model");
-        assert!(cad.model.ends_with(model_file.file_name().unwrap().to_str().unwrap()) && cad.gmsh_version.starts_with("4."), "{cad:?}");
+        // every entity of the mesh bound, its nodes on the model
+        assert!(
+            !cad.bound.is_empty()
+                && cad
+                    .bound
+                    .iter()
+                    .all(|b| !b.model.is_empty() && b.max_distance <= 1e-9),
+            "{:?}",
+            cad.bound
+        );
+        groups_kept(&mesh, &out);
+        assert!(
+            cad.model
+                .ends_with(model_file.file_name().unwrap().to_str().unwrap())
+                && cad.gmsh_version.starts_with("4."),
+            "{cad:?}"
+        );
         eprintln!("{kind} p = {p}: {} elements, min SJ {:.3}, boundary {:.3e} (Gmsh setOrder: {invalid} invalid, {peer:.3e}), {:.2} s", r.cells, r.quality.scaled_jacobian.min, r.quality.boundary_sample_distance, r.total_s);
     }
 }
 
 /// How many nodes Gmsh finds on the model's curves (entities of dimension 1).
 fn nodes_on_curves(g: &Value) -> u64 {
-    g["entities"].as_array().unwrap().iter().filter(|e| e["dim"] == 1).map(|e| e["nodes"].as_u64().unwrap()).sum()
+    g["entities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["dim"] == 1)
+        .map(|e| e["nodes"].as_u64().unwrap())
+        .sum()
 }
 
 #[test]
 fn a_filleted_box_of_tetrahedra_is_curved_onto_its_faces_and_their_edges() {
     // nodes on the curves where the faces meet were judged
-    curved_at_p2_p3("fillet_box", |g, _| assert!(nodes_on_curves(g) > 0, "{}", g["entities"]));
+    curved_at_p2_p3("fillet_box", |g, _| {
+        assert!(nodes_on_curves(g) > 0, "{}", g["entities"])
+    });
 }
 
 #[test]
 fn an_extruded_naca_wing_of_hexahedra_is_curved_onto_its_step() {
     // the file saves no line elements (groups on surfaces only): the new
     // nodes along the wing's edges are put on their curves all the same
-    curved_at_p2_p3("wing", |g, p| assert!(nodes_on_curves(g) >= 40 * (p as u64 - 1), "{}", g["entities"]));
+    curved_at_p2_p3("wing", |g, p| {
+        assert!(
+            nodes_on_curves(g) >= 40 * (p as u64 - 1),
+            "{}",
+            g["entities"]
+        )
+    });
 }
 
 /// The wing at the issue's size (2,024 hexes) at p = 3: the nose element
@@ -163,7 +268,10 @@ fn the_full_wing_at_p3_fits_its_nose_closer_than_gmsh() {
     assert!(r.quality.settling.fitted, "{:?}", r.quality.settling);
     on_its_cad(&model_file, &out, &r, peer);
     let ours = r.quality.boundary_sample_distance;
-    assert!(ours < 2e-6 && ours < peer / 40.0, "boundary error {ours:e}, Gmsh setOrder's {peer:e}");
+    assert!(
+        ours < 2e-6 && ours < peer / 40.0,
+        "boundary error {ours:e}, Gmsh setOrder's {peer:e}"
+    );
     eprintln!("wing 2,024 hexes p = 3: min SJ {:.3}, boundary {ours:.3e} (Gmsh setOrder {peer:.3e}), {:.2} s", r.quality.scaled_jacobian.min, r.total_s);
 }
 
@@ -171,7 +279,14 @@ fn the_full_wing_at_p3_fits_its_nose_closer_than_gmsh() {
 fn a_step_circle_and_the_exact_circle_curve_a_mesh_alike() {
     let dir = tempfile::tempdir().unwrap();
     let (step, mesh) = (dir.path().join("disk.step"), dir.path().join("disk.msh"));
-    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("disk"), step.as_os_str(), mesh.as_os_str()]);
+    common::run_script(
+        "cad_primitives.py",
+        &[
+            std::ffi::OsStr::new("disk"),
+            step.as_os_str(),
+            mesh.as_os_str(),
+        ],
+    );
     // without physical groups the circle is entity 5: `curve5`
     let circle = "[[group]]\nname = \"curve5\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 0.5 }\n";
     for p in [2, 3] {
@@ -180,29 +295,191 @@ fn a_step_circle_and_the_exact_circle_curve_a_mesh_alike() {
         assert!(a.quality.invalid_elements.is_empty() && b.quality.invalid_elements.is_empty());
         let rel = |x: f64, y: f64| (x - y).abs() / y.abs();
         // the square's sides slip with CAD, stay without: the wall is the same
-        assert!(rel(a.quality.min_det_j, b.quality.min_det_j) < 1e-9, "p = {p}: min det J {} against {}", a.quality.min_det_j, b.quality.min_det_j);
-        assert!(rel(a.quality.boundary_sample_distance, b.quality.boundary_sample_distance) < 1e-6, "p = {p}: {} against {}", a.quality.boundary_sample_distance, b.quality.boundary_sample_distance);
+        assert!(
+            rel(a.quality.min_det_j, b.quality.min_det_j) < 1e-9,
+            "p = {p}: min det J {} against {}",
+            a.quality.min_det_j,
+            b.quality.min_det_j
+        );
+        assert!(
+            rel(
+                a.quality.boundary_sample_distance,
+                b.quality.boundary_sample_distance
+            ) < 1e-6,
+            "p = {p}: {} against {}",
+            a.quality.boundary_sample_distance,
+            b.quality.boundary_sample_distance
+        );
     }
     // a geometry file given with --cad overrides the groups it names: the
     // circle held fixed is no curved part, and a side of the square slips
     let held = "[[group]]\nname = \"curve5\"\nkind = \"fixed\"\n[[group]]\nname = \"curve1\"\nkind = \"slip\"\n";
     let (c, _) = curve_cad(dir.path(), &mesh, Some(&step), Some(held), 2).unwrap();
-    assert!(c.quality.boundary_error.is_empty(), "{:?}", c.quality.boundary_error);
+    assert!(
+        c.quality.boundary_error.is_empty(),
+        "{:?}",
+        c.quality.boundary_error
+    );
     let (a, _) = curve_cad(dir.path(), &mesh, Some(&step), None, 2).unwrap();
-    assert_eq!(a.quality.boundary_error.keys().collect::<Vec<_>>(), ["curve 5"]);
+    assert_eq!(
+        a.quality.boundary_error.keys().collect::<Vec<_>>(),
+        ["curve 5"]
+    );
+}
+
+/// The physical groups of the linear mesh `before` (dimension, tag, name,
+/// element count) are those of the curved mesh `after`, read by Gmsh.
+fn groups_kept(before: &Path, after: &Path) {
+    let groups = |m: &Path| common::run_checker("check_msh22.py", m)["physical_groups"].clone();
+    assert_eq!(
+        groups(before),
+        groups(after),
+        "physical groups of {} and {}",
+        before.display(),
+        after.display()
+    );
+}
+
+/// How much `a` and `b` (curved meshes of the same linear mesh) differ:
+/// the largest difference of a node of elements matched by their corners.
+fn twins_differ(a: &Path, b: &Path) -> f64 {
+    let c: Value = serde_json::from_slice(&common::run_script(
+        "mesh_twins.py",
+        &[Path::new("compare"), a, b],
+    ))
+    .unwrap();
+    assert_eq!(c["elements"], c["matched"], "{c}");
+    c["max_difference"].as_f64().unwrap()
 }
 
 #[test]
-fn a_mesh_of_another_model_or_with_renumbered_entities_is_refused() {
+fn a_mesh_from_meshio_as_msh22_curves_as_the_gmsh_file_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, step, _) = model(dir.path(), "fillet_box", &["--renumber"]);
+    let m22 = dir.path().join("fillet_box_meshio22.msh");
+    common::run_script("mesh_twins.py", &[Path::new("msh22"), &mesh, &m22]);
+    assert!(
+        std::fs::read_to_string(&m22)
+            .unwrap()
+            .contains("$MeshFormat\n2.2 0 8")
+            && !std::fs::read_to_string(&m22).unwrap().contains("$Entities")
+    );
+    let (a, out_a) = curve_cad(dir.path(), &mesh, Some(&step), None, 2).unwrap();
+    let (b, out_b) = curve_cad(dir.path(), &m22, Some(&step), None, 2).unwrap();
+    assert!(a.quality.invalid_elements.is_empty() && b.quality.invalid_elements.is_empty());
+    // measured 3.8e-11: the fitted places of the fillet's edges, whose
+    // facets meshio hands over in another order (see the note of issue 44)
+    let d = twins_differ(&out_a, &out_b);
+    assert!(d <= 1e-10, "the MSH 2.2 twin's nodes differ by {d:e}");
+    let g = judged(&step, &out_b);
+    assert_eq!(g["invalid"].as_u64(), Some(0), "{g}");
+    assert!(
+        g["node_distance"]["2"].as_f64().unwrap() <= 1e-10
+            && g["node_distance"]["1"].as_f64().unwrap() <= 1e-10,
+        "{g}"
+    );
+}
+
+#[test]
+fn a_mesh_in_millimetres_of_a_model_in_metres_is_refused_with_the_factor() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, step, _) = model(dir.path(), "naca2d", &["--renumber"]);
+    let mm = dir.path().join("naca2d_mm.msh");
+    common::run_script(
+        "mesh_twins.py",
+        &[Path::new("scaled"), &mesh, &mm, Path::new("1000")],
+    );
+    let e = curve_cad(dir.path(), &mm, Some(&step), None, 2)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("scaled by 1000") && e.contains("millimetres") && e.contains("--cad-scale 1000"),
+        "{e}"
+    );
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().all(|f| !f
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .contains("_cad_")),
+        "nothing written"
+    );
+    // the advice works: the model read in millimetres curves the mesh as
+    // the mesh in metres, a thousand times larger
+    let (m, _) = curve_cad(dir.path(), &mesh, Some(&step), None, 2).unwrap();
+    let output = dir.path().join("naca2d_mm_scaled.msh");
+    let cad = Some(CadSource {
+        model: step.clone(),
+        library: Some(common::gmsh_lib()),
+        scale: 1000.0,
+    });
+    let job = CurveJob {
+        input: mm.clone(),
+        geometry: None,
+        cad,
+        output,
+        format: OutputFormat::Msh41,
+        options: CurveOptions {
+            order: 2,
+            ..Default::default()
+        },
+        width: 300,
+        force: false,
+    };
+    let r = curve_file(&job, |_| {}).unwrap();
+    assert!(r.quality.invalid_elements.is_empty());
+    assert_eq!(r.cad.as_ref().unwrap().scale, 1000.0);
+    let rel = |x: f64, y: f64| (x - y).abs() / y.abs();
+    assert!(
+        rel(
+            r.quality.boundary_sample_distance,
+            1000.0 * m.quality.boundary_sample_distance
+        ) < 1e-3,
+        "{} against 1000 x {}",
+        r.quality.boundary_sample_distance,
+        m.quality.boundary_sample_distance
+    );
+    assert!(rel(r.quality.scaled_jacobian.min, m.quality.scaled_jacobian.min) < 1e-6);
+}
+
+#[test]
+fn a_mesh_of_another_model_is_refused_naming_the_entity_and_the_distance() {
     let dir = tempfile::tempdir().unwrap();
     let (disk_step, disk_mesh) = (dir.path().join("disk.step"), dir.path().join("disk.msh"));
-    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("disk"), disk_step.as_os_str(), disk_mesh.as_os_str()]);
-    let (mesh, step, _) = model(dir.path(), "naca2d", &["--renumber"]);
-    // the airfoil's mesh against the disk's model: curve 6 is not there
-    let e = curve_cad(dir.path(), &mesh, Some(&disk_step), None, 2).err().expect("refused").to_string();
-    assert!(e.contains("curve 6 is not in the model") && e.contains(".brep"), "{e}");
-    // renumbered: the tags exist but name other curves; a node is named
-    let e = curve_cad(dir.path(), &mesh, Some(&step), None, 2).err().expect("refused").to_string();
-    assert!(e.contains("node ") && e.contains("from the model's curve") && e.contains("same Gmsh version"), "{e}");
-    assert!(std::fs::read_dir(dir.path()).unwrap().all(|f| !f.unwrap().file_name().to_string_lossy().contains("_cad_")), "nothing written");
+    common::run_script(
+        "cad_primitives.py",
+        &[
+            std::ffi::OsStr::new("disk"),
+            disk_step.as_os_str(),
+            disk_mesh.as_os_str(),
+        ],
+    );
+    let (_, step, _) = model(dir.path(), "naca2d", &["--renumber"]);
+    // the disk's mesh against the airfoil's model
+    let e = curve_cad(dir.path(), &disk_mesh, Some(&step), None, 2)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("the mesh's curve ")
+            && e.contains("is on no entity of the model")
+            && e.contains("from the nearest of the model's curves (curve "),
+        "{e}"
+    );
+    let d: f64 = e
+        .split(" lies ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .expect("a distance");
+    assert!(d > 1e-3, "{e}");
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().all(|f| !f
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .contains("_cad_")),
+        "nothing written"
+    );
 }

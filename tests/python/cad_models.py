@@ -27,8 +27,10 @@ DIR/wing.brep, as a user must, and the mesh binds to that file. Physical groups:
 none for naca2d and fillet_box (every entity's elements are saved, as
 Gmsh does by default), wing, farfield, ends and fluid for the wing.
 
---renumber: mesh in the session that built the model instead (its entity
-tags are not the STEP's: the mesh of a model renumbered on import).
+--renumber: mesh in the session that built the model instead, as the
+Gmsh tutorials do (its entity tags are not those of the STEP read again:
+`--cad` binds it by geometry); Gmsh's own curving (--peers) then runs on
+the model built again in its session.
 --peers P: Gmsh's own curving of the same mesh on the same CAD (setOrder
 P, and with --methods also HighOrderFastCurving / HighOrderElastic),
 each from the linear mesh, judged as check_cad.py judges ours; prints
@@ -254,7 +256,14 @@ def peers(p):
     out = {}
     for method in a.methods.split(","):
         gmsh.clear()
-        gmsh.open(model)
+        if a.renumber:
+            # in the meshing session: the model built again, as it was meshed
+            build()
+            if a.kind == "wing":
+                gmsh.model.occ.removeAllDuplicates()
+                gmsh.model.occ.synchronize()
+        else:
+            gmsh.open(model)
         gmsh.merge(msh)
         t0 = time.perf_counter()
         gmsh.model.mesh.setOrder(p)

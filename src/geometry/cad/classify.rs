@@ -91,16 +91,27 @@ struct Candidates {
 
 /// For every facet of `b`, the entity of dimension `dim` of `model` it
 /// lies on; `entities` groups the facets by the mesh's entities.
-pub fn classify(model: &Arc<CadModel>, dim: usize, b: Boundary, entities: &[MeshEntity]) -> Result<Vec<OnModel>, ClassifyError> {
+pub fn classify(
+    model: &Arc<CadModel>,
+    dim: usize,
+    b: Boundary,
+    entities: &[MeshEntity],
+) -> Result<Vec<OnModel>, ClassifyError> {
     let tags = model.entities(dim)?;
-    let boxes = tags.iter().map(|&t| model.bounding_box(dim as i32, t)).collect::<Result<Vec<_>, _>>()?;
+    let boxes = tags
+        .iter()
+        .map(|&t| model.bounding_box(dim as i32, t))
+        .collect::<Result<Vec<_>, _>>()?;
     let c = Candidates { dim, tags, boxes };
     let mut out: Vec<Option<OnModel>> = vec![None; b.facets.len()];
     for e in entities {
         match whole(model, &c, b, e)? {
             Some((tag, nodes, d)) => {
                 for &f in &e.facets {
-                    let distance = b.facets[f].iter().map(|n| d[nodes.binary_search(n).expect("a node of the entity")]).fold(0.0, f64::max);
+                    let distance = b.facets[f]
+                        .iter()
+                        .map(|n| d[nodes.binary_search(n).expect("a node of the entity")])
+                        .fold(0.0, f64::max);
                     out[f] = Some(OnModel { tag, distance });
                 }
             }
@@ -111,7 +122,10 @@ pub fn classify(model: &Arc<CadModel>, dim: usize, b: Boundary, entities: &[Mesh
             }
         }
     }
-    Ok(out.into_iter().map(|o| o.expect("every facet is in an entity")).collect())
+    Ok(out
+        .into_iter()
+        .map(|o| o.expect("every facet is in an entity"))
+        .collect())
 }
 
 /// The box `bx` grown by `pad` on every side.
@@ -121,7 +135,15 @@ fn padded(bx: [[f64; 3]; 2], pad: f64) -> [[f64; 3]; 2] {
 
 /// The bounding box of `points`.
 pub fn bounds(points: impl IntoIterator<Item = [f64; 3]>) -> [[f64; 3]; 2] {
-    points.into_iter().fold([[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]], |[lo, hi], p| [std::array::from_fn(|k| lo[k].min(p[k])), std::array::from_fn(|k| hi[k].max(p[k]))])
+    points.into_iter().fold(
+        [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]],
+        |[lo, hi], p| {
+            [
+                std::array::from_fn(|k| lo[k].min(p[k])),
+                std::array::from_fn(|k| hi[k].max(p[k])),
+            ]
+        },
+    )
 }
 
 fn contains(outer: [[f64; 3]; 2], inner: [[f64; 3]; 2]) -> bool {
@@ -135,21 +157,43 @@ fn meets(a: [[f64; 3]; 2], b: [[f64; 3]; 2]) -> bool {
 /// The distances of `points` from entity (dim, tag): one batched call, or
 /// where Gmsh fails the batch one call a point, a failed point infinitely
 /// far (it is on no entity Gmsh can project it onto).
-fn distances(model: &CadModel, dim: usize, tag: i32, points: &[[f64; 3]]) -> Result<Vec<f64>, CadError> {
+fn distances(
+    model: &CadModel,
+    dim: usize,
+    tag: i32,
+    points: &[[f64; 3]],
+) -> Result<Vec<f64>, CadError> {
     let dist = |p: &[f64; 3], q: &[f64; 3]| crate::numeric::dist2(*p, *q).sqrt();
     if points.is_empty() {
         return Ok(Vec::new());
     }
     match model.closest_points(dim, tag, points) {
-        Ok(f) if f.len() == points.len() => Ok(points.iter().zip(&f).map(|(p, q)| dist(p, q)).collect()),
-        _ => Ok(points.iter().map(|p| model.closest_points(dim, tag, std::slice::from_ref(p)).ok().and_then(|f| f.first().map(|q| dist(p, q))).unwrap_or(f64::INFINITY)).collect()),
+        Ok(f) if f.len() == points.len() => {
+            Ok(points.iter().zip(&f).map(|(p, q)| dist(p, q)).collect())
+        }
+        _ => Ok(points
+            .iter()
+            .map(|p| {
+                model
+                    .closest_points(dim, tag, std::slice::from_ref(p))
+                    .ok()
+                    .and_then(|f| f.first().map(|q| dist(p, q)))
+                    .unwrap_or(f64::INFINITY)
+            })
+            .collect()),
     }
 }
 
 /// `d`, the distances of `points` from entity (dim, tag) by Gmsh's
 /// closest point (about 1e-9 of the model's size off), made exact where
 /// `redo` says (Newton's method on the entity: [`super::CadShape`]).
-fn polished(model: &Arc<CadModel>, (dim, tag): (usize, i32), points: &[[f64; 3]], d: &mut [f64], redo: impl Fn(usize, f64) -> bool) {
+fn polished(
+    model: &Arc<CadModel>,
+    (dim, tag): (usize, i32),
+    points: &[[f64; 3]],
+    d: &mut [f64],
+    redo: impl Fn(usize, f64) -> bool,
+) {
     let shape = model.shape(dim, tag);
     for (k, (p, d)) in points.iter().zip(d.iter_mut()).enumerate() {
         if d.is_finite() && redo(k, *d) {
@@ -166,13 +210,19 @@ const POLISH: f64 = 100.0;
 /// The centroid of facet `f`'s nodes.
 fn centroid(b: Boundary, f: usize) -> [f64; 3] {
     let n = &b.facets[f];
-    let s = n.iter().fold([0.0; 3], |s, &i| std::array::from_fn(|k| s[k] + b.nodes[i][k]));
+    let s = n.iter().fold([0.0; 3], |s, &i| {
+        std::array::from_fn(|k| s[k] + b.nodes[i][k])
+    });
     s.map(|x| x / n.len() as f64)
 }
 
 /// The nodes of `e`, each once, and the largest of their tolerances.
 fn nodes_of(b: Boundary, e: &MeshEntity) -> (Vec<usize>, f64) {
-    let mut v: Vec<usize> = e.facets.iter().flat_map(|&f| b.facets[f].iter().copied()).collect();
+    let mut v: Vec<usize> = e
+        .facets
+        .iter()
+        .flat_map(|&f| b.facets[f].iter().copied())
+        .collect();
     v.sort_unstable();
     v.dedup();
     let pad = v.iter().map(|&n| b.tolerance[n]).fold(0.0, f64::max);
@@ -183,10 +233,17 @@ fn nodes_of(b: Boundary, e: &MeshEntity) -> (Vec<usize>, f64) {
 /// tolerance, every facet's centroid over the trimmed entity. The guess
 /// if it does; else the one nearest the centroids. With it, `e`'s nodes
 /// (sorted) and their distances from it.
-fn whole(model: &Arc<CadModel>, c: &Candidates, b: Boundary, e: &MeshEntity) -> Result<Option<(i32, Vec<usize>, Vec<f64>)>, CadError> {
+fn whole(
+    model: &Arc<CadModel>,
+    c: &Candidates,
+    b: Boundary,
+    e: &MeshEntity,
+) -> Result<Option<(i32, Vec<usize>, Vec<f64>)>, CadError> {
     let (nodes, pad) = nodes_of(b, e);
     let bx = bounds(nodes.iter().map(|&n| b.nodes[n]));
-    let mut order: Vec<usize> = (0..c.tags.len()).filter(|&i| contains(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), bx)).collect();
+    let mut order: Vec<usize> = (0..c.tags.len())
+        .filter(|&i| contains(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), bx))
+        .collect();
     // the guess first: where it holds, nothing else is asked
     order.sort_by_key(|&i| Some(c.tags[i]) != e.guess);
     let mut best: Option<(f64, i32, Vec<f64>)> = None;
@@ -194,7 +251,11 @@ fn whole(model: &Arc<CadModel>, c: &Candidates, b: Boundary, e: &MeshEntity) -> 
         let tag = c.tags[i];
         let points: Vec<[f64; 3]> = nodes.iter().map(|&n| b.nodes[n]).collect();
         let mut d = distances(model, c.dim, tag, &points)?;
-        if !nodes.iter().zip(&d).all(|(&n, &d)| d <= POLISH * b.tolerance[n]) {
+        if !nodes
+            .iter()
+            .zip(&d)
+            .all(|(&n, &d)| d <= POLISH * b.tolerance[n])
+        {
             continue;
         }
         // exact for the report, and where Gmsh's figure is not enough
@@ -210,7 +271,12 @@ fn whole(model: &Arc<CadModel>, c: &Candidates, b: Boundary, e: &MeshEntity) -> 
         if Some(tag) == e.guess {
             return Ok(Some((tag, nodes, d)));
         }
-        let sag = mids.iter().zip(&feet).map(|(p, q)| crate::numeric::dist2(*p, *q)).fold(0.0, f64::max).sqrt();
+        let sag = mids
+            .iter()
+            .zip(&feet)
+            .map(|(p, q)| crate::numeric::dist2(*p, *q))
+            .fold(0.0, f64::max)
+            .sqrt();
         if best.as_ref().is_none_or(|(s, _, _)| sag < *s) {
             best = Some((sag, tag, d));
         }
@@ -225,18 +291,35 @@ fn span(bx: [[f64; 3]; 2]) -> f64 {
 
 /// Each facet of `e` bound on its own (see the module docs); a facet on
 /// no candidate is [`ClassifyError::Off`].
-fn by_facet(model: &Arc<CadModel>, c: &Candidates, b: Boundary, e: &MeshEntity) -> Result<Vec<(usize, OnModel)>, ClassifyError> {
+fn by_facet(
+    model: &Arc<CadModel>,
+    c: &Candidates,
+    b: Boundary,
+    e: &MeshEntity,
+) -> Result<Vec<(usize, OnModel)>, ClassifyError> {
     let (nodes, pad) = nodes_of(b, e);
-    let local: std::collections::HashMap<usize, usize> = nodes.iter().enumerate().map(|(k, &n)| (n, k)).collect();
+    let local: std::collections::HashMap<usize, usize> =
+        nodes.iter().enumerate().map(|(k, &n)| (n, k)).collect();
     let bx = bounds(nodes.iter().map(|&n| b.nodes[n]));
-    let near: Vec<usize> = (0..c.tags.len()).filter(|&i| meets(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), bx)).collect();
+    let near: Vec<usize> = (0..c.tags.len())
+        .filter(|&i| meets(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), bx))
+        .collect();
     // per candidate, the distance of each node in its box (else infinite)
     let mut d = vec![vec![f64::INFINITY; nodes.len()]; near.len()];
     for (j, &i) in near.iter().enumerate() {
-        let inside: Vec<usize> = (0..nodes.len()).filter(|&k| contains(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), [b.nodes[nodes[k]]; 2])).collect();
+        let inside: Vec<usize> = (0..nodes.len())
+            .filter(|&k| {
+                contains(
+                    padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])),
+                    [b.nodes[nodes[k]]; 2],
+                )
+            })
+            .collect();
         let points: Vec<[f64; 3]> = inside.iter().map(|&k| b.nodes[nodes[k]]).collect();
         let mut got = distances(model, c.dim, c.tags[i], &points)?;
-        polished(model, (c.dim, c.tags[i]), &points, &mut got, |j, d| d <= POLISH * b.tolerance[nodes[inside[j]]]);
+        polished(model, (c.dim, c.tags[i]), &points, &mut got, |j, d| {
+            d <= POLISH * b.tolerance[nodes[inside[j]]]
+        });
         for (&k, g) in inside.iter().zip(got) {
             d[j][k] = g;
         }
@@ -244,21 +327,34 @@ fn by_facet(model: &Arc<CadModel>, c: &Candidates, b: Boundary, e: &MeshEntity) 
     let mut out = Vec::with_capacity(e.facets.len());
     for &f in &e.facets {
         let ks: Vec<usize> = b.facets[f].iter().map(|n| local[n]).collect();
-        let fits: Vec<usize> = (0..near.len()).filter(|&j| ks.iter().all(|&k| d[j][k] <= b.tolerance[nodes[k]])).collect();
+        let fits: Vec<usize> = (0..near.len())
+            .filter(|&j| ks.iter().all(|&k| d[j][k] <= b.tolerance[nodes[k]]))
+            .collect();
         let worst = |j: usize| ks.iter().map(|&k| d[j][k]).fold(0.0, f64::max);
         let j = match fits.as_slice() {
             [] => return Err(off(model, c, b, f)?),
             [j] => *j,
             _ => nearest_holding(model, c, (&near, &fits), centroid(b, f))?,
         };
-        out.push((f, OnModel { tag: c.tags[near[j]], distance: worst(j) }));
+        out.push((
+            f,
+            OnModel {
+                tag: c.tags[near[j]],
+                distance: worst(j),
+            },
+        ));
     }
     Ok(out)
 }
 
 /// Of the candidates `fits` (indices into `near`), the one whose trimmed
 /// entity holds the foot of `mid`, nearest; the nearest if none does.
-fn nearest_holding(model: &CadModel, c: &Candidates, (near, fits): (&[usize], &[usize]), mid: [f64; 3]) -> Result<usize, CadError> {
+fn nearest_holding(
+    model: &CadModel,
+    c: &Candidates,
+    (near, fits): (&[usize], &[usize]),
+    mid: [f64; 3],
+) -> Result<usize, CadError> {
     let mut best: Option<(bool, f64, usize)> = None;
     for &j in fits {
         let tag = c.tags[near[j]];
@@ -276,7 +372,12 @@ fn nearest_holding(model: &CadModel, c: &Candidates, (near, fits): (&[usize], &[
 
 /// The error for facet `f`: its node farthest from every entity, and the
 /// entity nearest to that node.
-fn off(model: &Arc<CadModel>, c: &Candidates, b: Boundary, f: usize) -> Result<ClassifyError, CadError> {
+fn off(
+    model: &Arc<CadModel>,
+    c: &Candidates,
+    b: Boundary,
+    f: usize,
+) -> Result<ClassifyError, CadError> {
     let mut worst: Option<Off> = None;
     for &n in &b.facets[f] {
         let mut nearest: Option<(f64, i32)> = None;
@@ -287,13 +388,29 @@ fn off(model: &Arc<CadModel>, c: &Candidates, b: Boundary, f: usize) -> Result<C
             }
         }
         let distance = nearest.map_or(f64::INFINITY, |m| m.0);
-        if distance > b.tolerance[n] && worst.as_ref().is_none_or(|w| distance / b.tolerance[n] > w.distance / w.tolerance) {
-            worst = Some(Off { facet: f, node: n, distance, nearest: nearest.map(|m| m.1), tolerance: b.tolerance[n] });
+        if distance > b.tolerance[n]
+            && worst
+                .as_ref()
+                .is_none_or(|w| distance / b.tolerance[n] > w.distance / w.tolerance)
+        {
+            worst = Some(Off {
+                facet: f,
+                node: n,
+                distance,
+                nearest: nearest.map(|m| m.1),
+                tolerance: b.tolerance[n],
+            });
         }
     }
     // every node is near some entity, but no one entity holds them all
     let n = b.facets[f][0];
-    Ok(ClassifyError::Off(worst.unwrap_or(Off { facet: f, node: n, distance: 0.0, nearest: None, tolerance: b.tolerance[n] })))
+    Ok(ClassifyError::Off(worst.unwrap_or(Off {
+        facet: f,
+        node: n,
+        distance: 0.0,
+        nearest: None,
+        tolerance: b.tolerance[n],
+    })))
 }
 
 /// A uniform scale between the mesh's boundary and the model, read from
@@ -316,7 +433,14 @@ pub fn scale_between(mesh: [[f64; 3]; 2], model: [[f64; 3]; 2]) -> Option<f64> {
 /// against metres, 25.4 for millimetres against inches, …), if it is one
 /// to 1 %, with the units: (factor, mesh's unit, model's unit).
 pub fn unit_factor(s: f64) -> Option<(f64, &'static str, &'static str)> {
-    const UNITS: [(f64, &str, &str); 6] = [(1000.0, "millimetres", "metres"), (25.4, "millimetres", "inches"), (10.0, "millimetres", "centimetres"), (100.0, "centimetres", "metres"), (304.8, "millimetres", "feet"), (12.0, "inches", "feet")];
+    const UNITS: [(f64, &str, &str); 6] = [
+        (1000.0, "millimetres", "metres"),
+        (25.4, "millimetres", "inches"),
+        (10.0, "millimetres", "centimetres"),
+        (100.0, "centimetres", "metres"),
+        (304.8, "millimetres", "feet"),
+        (12.0, "inches", "feet"),
+    ];
     UNITS.iter().find_map(|&(f, a, b)| {
         if (s / f - 1.0).abs() < 0.01 {
             Some((f, a, b))
@@ -340,12 +464,21 @@ mod tests {
         assert_eq!(unit_factor(1000.0), Some((1000.0, "millimetres", "metres")));
         let back = scale_between(model, mesh).unwrap();
         assert!((back - 1e-3).abs() < 1e-15);
-        assert_eq!(unit_factor(back).map(|u| (u.1, u.2)), Some(("metres", "millimetres")));
+        assert_eq!(
+            unit_factor(back).map(|u| (u.1, u.2)),
+            Some(("metres", "millimetres"))
+        );
         // the same box, or a part of the model, is no scale
         assert_eq!(scale_between(model, model), None);
-        assert_eq!(scale_between([[0.0, -0.5, 0.0], [1.0, 0.5, 1.0]], model), None);
+        assert_eq!(
+            scale_between([[0.0, -0.5, 0.0], [1.0, 0.5, 1.0]], model),
+            None
+        );
         // a box twice as large but moved is no uniform scale
-        assert_eq!(scale_between([[5.0, -1.0, 0.0], [9.0, 1.0, 2.0]], model), None);
+        assert_eq!(
+            scale_between([[5.0, -1.0, 0.0], [9.0, 1.0, 2.0]], model),
+            None
+        );
         assert_eq!(unit_factor(3.0), None);
     }
 }
