@@ -124,7 +124,7 @@ pub fn bind<const D: usize>(
     };
     // a part per model entity and group the geometry file binds there
     let mut keys: BTreeMap<(i32, Option<usize>), usize> = BTreeMap::new();
-    let mut part_of = Vec::with_capacity(on.len());
+    let mut key_of = Vec::with_capacity(on.len());
     for (f, o) in on.iter().enumerate() {
         let bound = overridden(&overrides, &mesh.groups[f], names).map_err(|m| {
             err(format!(
@@ -132,9 +132,16 @@ pub fn bind<const D: usize>(
                 mesh.entity_name(f, kind_word)
             ))
         })?;
-        let n = keys.len();
-        part_of.push(*keys.entry((o.tag, bound)).or_insert(n));
+        keys.insert((o.tag, bound), 0);
+        key_of.push((o.tag, bound));
     }
+    // parts in the order of the model's tags, whatever the order of the
+    // file's elements: the same mesh from another writer (meshio's MSH
+    // 2.2) is curved to the same nodes
+    for (i, v) in keys.values_mut().enumerate() {
+        *v = i;
+    }
+    let part_of: Vec<usize> = key_of.iter().map(|k| keys[k]).collect();
     let mut parts: Vec<Option<BoundaryPart<D>>> = vec![None; keys.len()];
     for (&(tag, group), &i) in &keys {
         let ty = model.entity_type(D - 1, tag).map_err(gmsh)?;
@@ -185,7 +192,12 @@ pub fn bind<const D: usize>(
     }
     let bound = mesh.bound(&on, names, kind_word);
     let names: Vec<String> = parts.iter().map(|p| p.name.clone()).collect();
-    let facets = mesh.facets.into_iter().zip(part_of).collect();
+    let mut facets: Vec<(Vec<usize>, usize)> = mesh.facets.into_iter().zip(part_of).collect();
+    facets.sort_by_cached_key(|(f, part)| {
+        let mut k = f.clone();
+        k.sort_unstable();
+        (*part, k)
+    });
     Ok(CadParts {
         facets,
         parts,

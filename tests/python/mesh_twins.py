@@ -2,9 +2,12 @@
 """Twins of a Gmsh mesh as other tools would hand it over, and a
 comparison of two curved meshes element by element.
 
-  msh22 IN OUT         meshio reads IN and writes OUT as ASCII MSH 2.2
+  msh22 IN OUT [--one-entity]
+                       meshio reads IN and writes OUT as ASCII MSH 2.2
                        (a mesh from another tool: no $Entities; elementary
-                       and physical tags as meshio keeps them)
+                       and physical tags as meshio keeps them; with
+                       --one-entity every boundary element on elementary
+                       entity 1, as a mesher that merged the faces)
   scaled IN OUT S      IN with every node's coordinates times S, written
                        by Gmsh as MSH 4.1 (a mesh in other units)
   compare A B          Gmsh reads both; the elements of the highest
@@ -12,17 +15,23 @@ comparison of two curved meshes element by element.
                        and their nodes compared; prints JSON {"elements",
                        "matched", "max_difference"}
 
-Usage: mesh_twins.py msh22 IN OUT | scaled IN OUT S | compare A B"""
+Usage: mesh_twins.py msh22 IN OUT [--one-entity] | scaled IN OUT S | compare A B"""
 import json
 import sys
 
 import gmsh
 
 
-def msh22(src, out):
+def msh22(src, out, one_entity=False):
     import meshio
 
-    meshio.write(out, meshio.read(src), file_format="gmsh22", binary=False)
+    m = meshio.read(src)
+    if one_entity:
+        dim = max(meshio._mesh.topological_dimension.get(c.type, 0) for c in m.cells)
+        for c, tags in zip(m.cells, m.cell_data["gmsh:geometrical"]):
+            if meshio._mesh.topological_dimension.get(c.type, 0) == dim - 1:
+                tags[:] = 1
+    meshio.write(out, m, file_format="gmsh22", binary=False)
 
 
 def scaled(src, out, s):
@@ -74,8 +83,8 @@ def compare(a, b):
 
 if __name__ == "__main__":
     cmd = sys.argv[1:2]
-    if cmd == ["msh22"] and len(sys.argv) == 4:
-        msh22(sys.argv[2], sys.argv[3])
+    if cmd == ["msh22"] and len(sys.argv) in (4, 5):
+        msh22(sys.argv[2], sys.argv[3], sys.argv[4:] == ["--one-entity"])
     elif cmd == ["scaled"] and len(sys.argv) == 5:
         scaled(sys.argv[2], sys.argv[3], float(sys.argv[4]))
     elif cmd == ["compare"] and len(sys.argv) == 4:
