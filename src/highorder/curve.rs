@@ -1728,7 +1728,12 @@ fn corner_positions(shape: Shape, p: usize) -> Vec<usize> {
 /// Per curved group, the boundary error: the largest distance of its nodes
 /// and of its sampled boundary to its shape.
 pub fn boundary_errors<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<BTreeMap<String, BoundaryError>, HighOrderError> {
-    let nodes = per_part(mesh, parts, |b, target| b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max));
+    // each boundary element's points asked of its shape at once (a CAD
+    // shape answers them in one batch)
+    let nodes = per_part(mesh, parts, |b, target| {
+        let at: Vec<[f64; D]> = b.nodes.iter().map(|&n| mesh.nodes[n]).collect();
+        at.iter().zip(target.closest_points(&at)).map(|(&p, q)| crate::numeric::norm(crate::numeric::sub(p, q))).fold(0.0, f64::max)
+    });
     let sampled = sampled_per_part(mesh, parts, samples)?;
     Ok(parts
         .iter()
@@ -1772,18 +1777,20 @@ fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<
     let kinds: Vec<Shape> = mesh.shapes().iter().flat_map(|s| s.facets().iter().map(|f| f.0)).collect();
     let weights: Vec<(Shape, Vec<Vec<f64>>)> = kinds.into_iter().map(|k| Ok((k, facet_sample_weights(k, mesh.p, mesh.spacing, m)?))).collect::<Result<_, HighOrderError>>()?;
     Ok(per_part(mesh, parts, |b, target| {
-        let mut worst = 0.0f64;
         let of_kind = &weights.iter().find(|w| w.0 == b.shape).expect("validated facets").1;
-        for w in of_kind {
-            let mut x = [0.0; D];
-            for (&wi, &node) in w.iter().zip(b.nodes) {
-                for d in 0..D {
-                    x[d] += wi * mesh.nodes[node][d];
+        let at: Vec<[f64; D]> = of_kind
+            .iter()
+            .map(|w| {
+                let mut x = [0.0; D];
+                for (&wi, &node) in w.iter().zip(b.nodes) {
+                    for d in 0..D {
+                        x[d] += wi * mesh.nodes[node][d];
+                    }
                 }
-            }
-            worst = worst.max(target.distance(x));
-        }
-        worst
+                x
+            })
+            .collect();
+        at.iter().zip(target.closest_points(&at)).map(|(&p, q)| crate::numeric::norm(crate::numeric::sub(p, q))).fold(0.0f64, f64::max)
     }))
 }
 
