@@ -921,12 +921,15 @@ fn line_key(carrier: usize, s: [f64; 2], d: usize) -> LineKey {
     (carrier, d, if d == 0 { s[1] } else { s[0] }.to_bits())
 }
 
-/// A line's new nodes: their reference places, increasing, and the
-/// carrier parameters they settle at.
+/// A line's new nodes: their reference places, increasing, the carrier
+/// parameters they settle at, and their places at equal arc length (the
+/// fit's start, kept for a try at equal arc length: on CAD they cost as
+/// many projections as the fit).
 #[derive(Debug)]
 struct Line {
     reference: Vec<f64>,
     places: Vec<f64>,
+    arcs: Vec<f64>,
 }
 
 impl Line {
@@ -934,6 +937,12 @@ impl Line {
     fn place(&self, r: f64) -> Option<f64> {
         let j = self.reference.iter().position(|&x| x == r)?;
         Some(self.places[j])
+    }
+
+    /// The equal arc length parameter of the node at reference place `r`.
+    fn arc(&self, r: f64) -> Option<f64> {
+        let j = self.reference.iter().position(|&x| x == r)?;
+        Some(self.arcs[j])
     }
 }
 
@@ -1174,7 +1183,9 @@ impl<const D: usize> RefineBoundary<D> {
         // they cost the most of a snap: 3.8 s of the 5,082-tet torus's
         // 12 s at p = 2, asked again by its try at equal arc length)
         let empty = Fits::default();
-        let fits = if plan.places.contains(&Settle::Fit) { plan.fits.get_or_init(|| self.fitted_lines()) } else { &empty };
+        // (a try at equal arc length after the fitted one takes the lines'
+        // arc places from it)
+        let fits = if plan.places.contains(&Settle::Fit) { plan.fits.get_or_init(|| self.fitted_lines()) } else { plan.fits.get().unwrap_or(&empty) };
         let plan = &plan.places;
         for i in 0..self.roles.len() {
             let Role2::Slide { carrier, s } = self.roles[i] else { continue };
@@ -1193,7 +1204,7 @@ impl<const D: usize> RefineBoundary<D> {
                         s[d]
                     }
                 }),
-                Settle::Arc => self.arc_parameter(carrier, s),
+                Settle::Arc => self.arc_parameter(carrier, s, fits),
                 Settle::Image => s,
                 Settle::Keep => {
                     self.roles[i] = Role2::Fixed;
@@ -1242,8 +1253,9 @@ impl<const D: usize> RefineBoundary<D> {
     /// chord crowds towards the middle of the arc, which costs the
     /// interpolant a constant factor (measured on a circle arc of 0.2 rad:
     /// 3.7e-6 against 4.1e-7 at p = 3, 3.0e-9 against 3.3e-10 at p = 4).
-    fn arc_parameter(&self, c: usize, s: [f64; 2]) -> [f64; 2] {
-        std::array::from_fn(|k| if k < self.carriers[c].dims() { self.arc_place(c, s, k) } else { s[k] })
+    /// (Taken from `fits` where a fit of the node's line found it.)
+    fn arc_parameter(&self, c: usize, s: [f64; 2], fits: &Fits) -> [f64; 2] {
+        std::array::from_fn(|k| if k < self.carriers[c].dims() { fits.get(&line_key(c, s, k)).and_then(|l| l.arc(s[k])).unwrap_or_else(|| self.arc_place(c, s, k)) } else { s[k] })
     }
 
     /// The `k`-th coordinate of [`Self::arc_parameter`].
@@ -1351,7 +1363,7 @@ impl<const D: usize> RefineBoundary<D> {
             let curve = |xs: &[f64]| self.carrier_points(c, &xs.iter().map(|&x| base(x)).collect::<Vec<_>>(), 1.0);
             crate::geometry::fit::fitted_places(curve, |qs: &[[f64; D]]| shape.closest_points(qs), &ends, &start)
         });
-        Line { reference, places: fitted.unwrap_or(start) }
+        Line { reference, places: fitted.unwrap_or_else(|| start.clone()), arcs: start }
     }
 
     /// The image X(p) of carrier `c`'s starting point p: on its curve, or

@@ -1528,6 +1528,9 @@ where
     let certifiers = Certifiers::new(&straight.shapes(), straight.p, straight.spacing)?;
     let linear = Linear::new(&straight)?;
     let mut refused: Option<Snap<D>> = None;
+    // one plan's clones: the try at equal arc length takes the lines' arc
+    // places found by the fitted one
+    let shared = SettlePlan::new(straight.nodes.len());
     for fitted in [true, false] {
         // a few elements the fitted places left valid but sheared are the
         // repair's to mend, keeping the fit's accuracy elsewhere; equal arc
@@ -1538,7 +1541,7 @@ where
         if !fitted && refused.as_ref().is_some_and(|r| r.valid && r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64) {
             break;
         }
-        let mut plan = SettlePlan::new(straight.nodes.len());
+        let mut plan = shared.clone();
         if !fitted {
             plan.places.fill(Settle::Arc);
         }
