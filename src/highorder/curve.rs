@@ -1786,8 +1786,8 @@ fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<
             .map(|w| {
                 let mut x = [0.0; D];
                 for (&wi, &node) in w.iter().zip(b.nodes) {
-                    for d in 0..D {
-                        x[d] += wi * mesh.nodes[node][d];
+                    for (xd, nd) in x.iter_mut().zip(mesh.nodes[node]) {
+                        *xd += wi * nd;
                     }
                 }
                 x

@@ -533,7 +533,8 @@ impl CadShape {
                 let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
                 let step = if k == 1 {
                     let h = dot(d[0], d[0]) + dot(second(0), r);
-                    if !(h > 0.0) {
+                    // (NaN included)
+                    if h.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                         continue;
                     }
                     [-dot(d[0], r) / h, 0.0]
