@@ -161,6 +161,26 @@ impl<const D: usize> BoundaryPart<D> {
             _ => None,
         }
     }
+
+    /// [`Self::image`] of each of `ps`, in order: the closest points asked
+    /// together (a CAD shape answers them in one batch).
+    pub(crate) fn images(&self, ps: &[[f64; D]]) -> Vec<Option<[f64; D]>> {
+        match &self.kind {
+            PartKind::Move { target, correspondence: Correspondence::Normal, .. } => target.closest_points(ps).into_iter().map(Some).collect(),
+            _ => ps.iter().map(|&p| self.image(p)).collect(),
+        }
+    }
+
+    /// The velocity of [`Self::image`] at each of `ps` as the point moves
+    /// with velocity `dirs[i]`, where the target knows it
+    /// ([`crate::geometry::ClosestPoint::foot_speeds`]: CAD, the normal
+    /// correspondence); else None.
+    pub(crate) fn image_speeds(&self, ps: &[[f64; D]], dirs: &[[f64; D]]) -> Vec<Option<[f64; D]>> {
+        match &self.kind {
+            PartKind::Move { target, correspondence: Correspondence::Normal, .. } => target.foot_speeds(ps, dirs),
+            _ => vec![None; ps.len()],
+        }
+    }
 }
 
 /// A Q1 mesh as Algorithm 1 needs it: topology, positions, the boundary

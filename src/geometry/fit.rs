@@ -34,9 +34,10 @@ const ITERATIONS: usize = 12;
 /// that bring its interpolant closest to the shape (least squares of the
 /// offsets at [`SAMPLES`] in each interval).
 ///
-/// * `curve(x)`: the shape's point at the curve's parameter `x` in [0, 1]
-///   (x = 0 and 1 are the line's fixed end nodes);
-/// * `foot(q)`: the shape's point closest to `q`;
+/// * `curve(xs)`: the shape's points at the curve's parameters `xs` in
+///   [0, 1] (x = 0 and 1 are the line's fixed end nodes);
+/// * `feet(qs)`: the shape's points closest to `qs` (asked together: on
+///   CAD one batch of Gmsh's calls);
 /// * `reference`: the nodes' reference places, increasing from 0 to 1
 ///   (equispaced or Gauss–Lobatto), ends included;
 /// * `start`: the inner nodes' parameters to start from (equal arc
@@ -45,22 +46,19 @@ const ITERATIONS: usize = 12;
 /// Returns the inner nodes' parameters, or None where the fit does not
 /// improve on `start` (a straight line, a flat curve, a step that would
 /// let the nodes cross): then `start` stands.
-pub fn fitted_places<const D: usize>(curve: impl Fn(f64) -> [f64; D], foot: impl Fn([f64; D]) -> [f64; D], reference: &[f64], start: &[f64]) -> Option<Vec<f64>> {
+pub fn fitted_places<const D: usize>(curve: impl Fn(&[f64]) -> Vec<[f64; D]>, feet: impl Fn(&[[f64; D]]) -> Vec<[f64; D]>, reference: &[f64], start: &[f64]) -> Option<Vec<f64>> {
     let m = start.len();
     debug_assert_eq!(reference.len(), m + 2);
     let basis = Interpolant::new(reference);
-    let ends = [curve(0.0), curve(1.0)];
+    let ends: [[f64; D]; 2] = curve(&[0.0, 1.0]).try_into().ok()?;
     let scale = dist2(ends[0], ends[1]).sqrt();
     let residual = |x: &[f64]| -> Option<Vec<f64>> {
         let mut nodes = Vec::with_capacity(m + 2);
         nodes.push(ends[0]);
-        nodes.extend(x.iter().map(|&t| curve(t)));
+        nodes.extend(curve(x));
         nodes.push(ends[1]);
-        let mut r = Vec::with_capacity(D * basis.samples.len());
-        for w in &basis.samples {
-            let q: [f64; D] = std::array::from_fn(|i| w.iter().zip(&nodes).map(|(w, n)| w * n[i]).sum());
-            r.extend(sub(q, foot(q)));
-        }
+        let qs: Vec<[f64; D]> = basis.samples.iter().map(|w| std::array::from_fn(|i| w.iter().zip(&nodes).map(|(w, n)| w * n[i]).sum())).collect();
+        let r: Vec<f64> = qs.iter().zip(feet(&qs)).flat_map(|(&q, f)| sub(q, f)).collect();
         r.iter().all(|v| v.is_finite()).then_some(r)
     };
     let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
@@ -241,7 +239,7 @@ mod tests {
         let total = *lengths.last().unwrap();
         let arc = |f: f64| lengths.iter().position(|&l| l >= f * total).unwrap() as f64 / 20_000.0;
         let start = [arc(1.0 / 3.0), arc(2.0 / 3.0)];
-        let fitted = fitted_places(curve, foot, &[0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0], &start).expect("a curved line is fitted");
+        let fitted = fitted_places(|xs: &[f64]| xs.iter().map(|&x| curve(x)).collect(), |qs: &[[f64; 2]]| qs.iter().map(|&q| foot(q)).collect(), &[0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0], &start).expect("a curved line is fitted");
         let (before, after) = (error(&curve, &foot, &start), error(&curve, &foot, &fitted));
         assert!(before > 2.5e-2 && after < 2e-4, "equal arc length {before:.3e}, fitted {after:.3e}");
     }
@@ -254,6 +252,6 @@ mod tests {
             let s = (q[0] + 2.0 * q[1]) / 5.0;
             [s, 2.0 * s]
         };
-        assert!(fitted_places(curve, foot, &[0.0, 0.5, 1.0], &[0.5]).is_none());
+        assert!(fitted_places(|xs: &[f64]| xs.iter().map(|&x| curve(x)).collect(), |qs: &[[f64; 2]]| qs.iter().map(|&q| foot(q)).collect(), &[0.0, 0.5, 1.0], &[0.5]).is_none());
     }
 }

@@ -91,6 +91,23 @@ pub trait ClosestPoint<const D: usize>: Send + Sync + std::fmt::Debug {
     /// equally close (`p` at a circle's centre, say) one of them.
     fn closest_point(&self, p: [f64; D]) -> [f64; D];
 
+    /// [`Self::closest_point`] of each of `ps`, in order. A shape whose
+    /// answers cost a call into another library (CAD) answers them
+    /// together; the others one by one.
+    fn closest_points(&self, ps: &[[f64; D]]) -> Vec<[f64; D]> {
+        ps.iter().map(|&p| self.closest_point(p)).collect()
+    }
+
+    /// The velocity of the closest point of each of `ps` as the point
+    /// moves with velocity `dirs[i]` (the derivative of the foot map),
+    /// where the shape knows it in closed form from its parametrisation
+    /// (CAD); None where it does not (the caller differentiates the feet
+    /// numerically).
+    fn foot_speeds(&self, ps: &[[f64; D]], dirs: &[[f64; D]]) -> Vec<Option<[f64; D]>> {
+        let _ = dirs;
+        vec![None; ps.len()]
+    }
+
     /// Euclidean distance from `p` to the shape, `|p − closest_point(p)|`.
     fn distance(&self, p: [f64; D]) -> f64 {
         norm(sub(p, self.closest_point(p)))

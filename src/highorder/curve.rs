@@ -1528,6 +1528,9 @@ where
     let certifiers = Certifiers::new(&straight.shapes(), straight.p, straight.spacing)?;
     let linear = Linear::new(&straight)?;
     let mut refused: Option<Snap<D>> = None;
+    // one plan's clones: the try at equal arc length takes the lines' arc
+    // places found by the fitted one
+    let shared = SettlePlan::new(straight.nodes.len());
     for fitted in [true, false] {
         // a few elements the fitted places left valid but sheared are the
         // repair's to mend, keeping the fit's accuracy elsewhere; equal arc
@@ -1538,7 +1541,7 @@ where
         if !fitted && refused.as_ref().is_some_and(|r| r.valid && r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64) {
             break;
         }
-        let mut plan = SettlePlan::new(straight.nodes.len());
+        let mut plan = shared.clone();
         if !fitted {
             plan.places.fill(Settle::Arc);
         }
@@ -1728,7 +1731,12 @@ fn corner_positions(shape: Shape, p: usize) -> Vec<usize> {
 /// Per curved group, the boundary error: the largest distance of its nodes
 /// and of its sampled boundary to its shape.
 pub fn boundary_errors<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], samples: usize) -> Result<BTreeMap<String, BoundaryError>, HighOrderError> {
-    let nodes = per_part(mesh, parts, |b, target| b.nodes.iter().map(|&n| target.distance(mesh.nodes[n])).fold(0.0, f64::max));
+    // each boundary element's points asked of its shape at once (a CAD
+    // shape answers them in one batch)
+    let nodes = per_part(mesh, parts, |b, target| {
+        let at: Vec<[f64; D]> = b.nodes.iter().map(|&n| mesh.nodes[n]).collect();
+        at.iter().zip(target.closest_points(&at)).map(|(&p, q)| crate::numeric::norm(crate::numeric::sub(p, q))).fold(0.0, f64::max)
+    });
     let sampled = sampled_per_part(mesh, parts, samples)?;
     Ok(parts
         .iter()
@@ -1772,18 +1780,20 @@ fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<
     let kinds: Vec<Shape> = mesh.shapes().iter().flat_map(|s| s.facets().iter().map(|f| f.0)).collect();
     let weights: Vec<(Shape, Vec<Vec<f64>>)> = kinds.into_iter().map(|k| Ok((k, facet_sample_weights(k, mesh.p, mesh.spacing, m)?))).collect::<Result<_, HighOrderError>>()?;
     Ok(per_part(mesh, parts, |b, target| {
-        let mut worst = 0.0f64;
         let of_kind = &weights.iter().find(|w| w.0 == b.shape).expect("validated facets").1;
-        for w in of_kind {
-            let mut x = [0.0; D];
-            for (&wi, &node) in w.iter().zip(b.nodes) {
-                for d in 0..D {
-                    x[d] += wi * mesh.nodes[node][d];
+        let at: Vec<[f64; D]> = of_kind
+            .iter()
+            .map(|w| {
+                let mut x = [0.0; D];
+                for (&wi, &node) in w.iter().zip(b.nodes) {
+                    for (xd, nd) in x.iter_mut().zip(mesh.nodes[node]) {
+                        *xd += wi * nd;
+                    }
                 }
-            }
-            worst = worst.max(target.distance(x));
-        }
-        worst
+                x
+            })
+            .collect();
+        at.iter().zip(target.closest_points(&at)).map(|(&p, q)| crate::numeric::norm(crate::numeric::sub(p, q))).fold(0.0f64, f64::max)
     }))
 }
 

@@ -277,8 +277,8 @@ pub struct CadShape {
 /// that turns ∂u × ∂v into Gmsh's normal of a surface.
 #[derive(Debug, Default)]
 struct Known {
-    memo: HashMap<[u64; 4], ([f64; 3], [f64; 3])>,
-    seeds: HashMap<[i64; 3], [f64; 2]>,
+    memo: HashMap<[u64; 4], Answer, Mixed>,
+    seeds: HashMap<[i64; 3], [f64; 2], Mixed>,
     /// Range, seed cell size, normal sign: found at the first query.
     frame: Option<Frame>,
 }
@@ -290,11 +290,80 @@ struct Frame {
     sign: f64,
 }
 
+/// A query's answer: the foot, the unit normal there, the foot's
+/// parameters.
+type Answer = ([f64; 3], [f64; 3], [f64; 2]);
+
 /// A seed cell's side, as a fraction of the entity's bounding box: a query
 /// starts from a foot found for a point this close (the feet of such
 /// points are close unless the point is near the shape's medial axis,
 /// which the nodes and samples of a mesh on the shape are not).
 const SEED_CELL: f64 = 1e-3;
+
+/// How far, in seed cells, a point of a batch with no seed around it
+/// looks for an answered point of the batch to start from.
+const BATCH_SEED: f64 = 10.0;
+
+/// The 26 cells around a seed cell, nearest first (sharing a side, then
+/// an edge, then a corner).
+const NEIGHBOURS: [[i64; 3]; 26] = {
+    let mut out = [[0; 3]; 26];
+    let mut n = 0;
+    let mut shared = 1;
+    while shared <= 3 {
+        let mut k = 0;
+        while k < 27 {
+            let o = [k as i64 % 3 - 1, (k as i64 / 3) % 3 - 1, k as i64 / 9 - 1];
+            if o[0].abs() + o[1].abs() + o[2].abs() == shared {
+                out[n] = o;
+                n += 1;
+            }
+            k += 1;
+        }
+        shared += 1;
+    }
+    out
+};
+
+/// The seed of `cell`, else of the nearest cell around it holding one.
+fn seed_near(seeds: &HashMap<[i64; 3], [f64; 2], Mixed>, cell: [i64; 3]) -> Option<[f64; 2]> {
+    seeds.get(&cell).or_else(|| NEIGHBOURS.iter().find_map(|o| seeds.get(&std::array::from_fn(|i| cell[i] + o[i])))).copied()
+}
+
+/// A hasher for the memo's and the seeds' keys (a few words of bits):
+/// each word multiplied in, the sum mixed at the end (the standard
+/// SipHash cost as much as a Newton step's evaluation).
+#[derive(Clone, Copy, Debug, Default)]
+struct Mixed(u64);
+
+impl std::hash::Hasher for Mixed {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn finish(&self) -> u64 {
+        let mut x = self.0;
+        x ^= x >> 33;
+        x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        x ^ (x >> 33)
+    }
+}
+
+impl std::hash::BuildHasher for Mixed {
+    type Hasher = Mixed;
+
+    fn build_hasher(&self) -> Mixed {
+        Mixed(0)
+    }
+}
 
 /// The foot of a query, its parameters and its first derivatives.
 struct Foot {
@@ -321,7 +390,7 @@ impl CadShape {
         let key = [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), planar as u64];
         let mut known = self.known.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(&r) = known.memo.get(&key) {
-            return r;
+            return (r.0, r.1);
         }
         match self.model.with(|s| self.solve(s, &mut known, p, planar)) {
             Ok(r) => {
@@ -330,7 +399,7 @@ impl CadShape {
                     known.seeds.clear();
                 }
                 known.memo.insert(key, r);
-                r
+                (r.0, r.1)
             }
             Err(e) => {
                 self.model.record(e);
@@ -339,17 +408,244 @@ impl CadShape {
         }
     }
 
+    /// [`Self::project`] of each of `ps`, in order, with the same answers
+    /// up to round-off: the memo asked first, then the rest under one hold
+    /// of the session, Newton's method run on all the seeded points at once
+    /// (each of Gmsh's evaluations takes every point's parameters in one
+    /// call: one lock, one entity look-up and one array per step, not per
+    /// point and step).
+    fn project_all(&self, ps: &[[f64; 3]], planar: bool) -> Vec<Answer> {
+        let key = |p: &[f64; 3]| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), planar as u64];
+        let mut known = self.known.lock().unwrap_or_else(|e| e.into_inner());
+        let mut out: Vec<Option<Answer>> = ps.iter().map(|p| known.memo.get(&key(p)).copied()).collect();
+        let fresh: Vec<usize> = (0..ps.len()).filter(|&i| out[i].is_none()).collect();
+        if !fresh.is_empty() {
+            if let Err(e) = self.model.with(|s| self.solve_all(s, &mut known, ps, planar, &mut out)) {
+                self.model.record(e);
+            }
+            for &i in &fresh {
+                if let Some(r) = out[i] {
+                    if known.memo.len() >= MEMO_SIZE {
+                        known.memo.clear();
+                        known.seeds.clear();
+                    }
+                    known.memo.insert(key(&ps[i]), r);
+                }
+            }
+        }
+        ps.iter().zip(out).map(|(&p, r)| r.unwrap_or((p, [0.0, 0.0, 1.0], [f64::NAN; 2]))).collect()
+    }
+
+    /// The derivative of the foot map at each of `ps` along `dirs[i]`
+    /// (the closest point's speed as the point moves by `dirs[i]`): from
+    /// the parameters of the foot, J H⁻¹ Jᵀ dir, where J holds the
+    /// tangents and H is Newton's Hessian of |S − p|² there. None where it
+    /// does not hold: the foot on the side of the parameter range (a
+    /// bound, or a closed shape's seam), the Hessian not positive, a
+    /// failed query.
+    fn foot_speeds(&self, ps: &[[f64; 3]], dirs: &[[f64; 3]], planar: bool) -> Vec<Option<[f64; 3]>> {
+        let answers = self.project_all(ps, planar);
+        let k = self.dim as usize;
+        let range = {
+            let known = self.known.lock().unwrap_or_else(|e| e.into_inner());
+            known.frame.map(|f| f.range)
+        };
+        let Some(range) = range else { return vec![None; ps.len()] };
+        // inside the range by a margin: at its side the foot may be held
+        // there (Newton's `edge`) or cross a seam, where J H⁻¹ Jᵀ is not
+        // its derivative
+        let inside = |uv: [f64; 2]| {
+            (0..k).all(|l| {
+                let (lo, hi) = (range[0][l].min(range[1][l]), range[0][l].max(range[1][l]));
+                let margin = 1e-6 * (hi - lo);
+                uv[l] > lo + margin && uv[l] < hi - margin
+            })
+        };
+        let at: Vec<usize> = (0..ps.len()).filter(|&i| answers[i].2.iter().all(|v| v.is_finite()) && inside(answers[i].2)).collect();
+        let mut out = vec![None; ps.len()];
+        if at.is_empty() {
+            return out;
+        }
+        let uv: Vec<f64> = at.iter().flat_map(|&i| answers[i].2[..k].to_vec()).collect();
+        let seconds = if k == 1 { 1 } else { 3 };
+        let evaluated = self.model.with(|s| Ok((s.derivative(self.dim, self.tag, &uv)?, s.second_derivative(self.dim, self.tag, &uv)?)));
+        let (ds, dds) = match evaluated {
+            Ok(v) if v.0.len() >= 3 * k * at.len() && v.1.len() >= 3 * seconds * at.len() => v,
+            Ok(_) => return out,
+            Err(e) => {
+                self.model.record(e);
+                return out;
+            }
+        };
+        for (j, &i) in at.iter().enumerate() {
+            let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
+            let dd = &dds[3 * seconds * j..3 * seconds * (j + 1)];
+            let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
+            let r = sub(answers[i].0, ps[i]);
+            let w = dirs[i];
+            out[i] = if k == 1 {
+                let h = dot(d[0], d[0]) + dot(second(0), r);
+                (h > 0.0).then(|| d[0].map(|c| c * dot(d[0], w) / h))
+            } else {
+                let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
+                let det = huu * hvv - huv * huv;
+                (huu > 0.0 && det > 0.0).then(|| {
+                    let (gu, gv) = (dot(d[0], w), dot(d[1], w));
+                    let (a, b) = ((hvv * gu - huv * gv) / det, (huu * gv - huv * gu) / det);
+                    std::array::from_fn(|c| a * d[0][c] + b * d[1][c])
+                })
+            };
+        }
+        out
+    }
+
+    /// The feet of the points of `ps` not yet in `out`, and the normals
+    /// there, into `out`: a point with no seed around it as
+    /// [`Self::solve`] does (it leaves one), then Newton's method on all
+    /// the seeded ones at once; Gmsh's projection where that fails.
+    fn solve_all(&self, s: &gmsh::Session, known: &mut Known, ps: &[[f64; 3]], planar: bool, out: &mut [Option<Answer>]) -> Result<(), CadError> {
+        let frame = match known.frame {
+            Some(f) => f,
+            None => *known.frame.insert(self.frame(s)?),
+        };
+        let cell_of = |p: &[f64; 3]| p.map(|c| (c / frame.cell).floor() as i64);
+        let mut seeded: Vec<(usize, [f64; 2])> = Vec::new();
+        // a point with no seed around it starts from the nearest point of
+        // the batch already answered, if within BATCH_SEED cells (the
+        // samples of a boundary element are a few cells apart)
+        let reach = (BATCH_SEED * frame.cell).powi(2);
+        for (i, p) in ps.iter().enumerate() {
+            if out[i].is_some() {
+                continue;
+            }
+            let near = || {
+                (0..ps.len())
+                    .filter_map(|j| out[j].filter(|a| a.2.iter().all(|v| v.is_finite())).map(|a| (crate::numeric::dist2(ps[j], *p), a.2)))
+                    .filter(|&(d, _)| d <= reach)
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .map(|(_, uv)| uv)
+            };
+            match seed_near(&known.seeds, cell_of(p)).or_else(near) {
+                Some(uv) => seeded.push((i, uv)),
+                None => out[i] = Some(self.solve(s, known, *p, planar)?),
+            }
+        }
+        if seeded.is_empty() {
+            return Ok(());
+        }
+        let points: Vec<[f64; 3]> = seeded.iter().map(|&(i, _)| ps[i]).collect();
+        let feet = self.newton_all(s, &points, seeded.iter().map(|&(_, uv)| uv).collect(), frame.range)?;
+        for (&(i, _), foot) in seeded.iter().zip(feet) {
+            let p = ps[i];
+            let foot = match foot {
+                Some(f) => f,
+                None => self.from_gmsh(s, p, frame.range)?,
+            };
+            known.seeds.insert(cell_of(&p), foot.uv);
+            let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
+            out[i] = Some((foot.x, n, foot.uv));
+        }
+        Ok(())
+    }
+
+    /// [`Self::newton`] (with `edge` false) of each of `ps` from its
+    /// parameters in `uv`, all the points' evaluations of a step in one
+    /// call of each of Gmsh's functions; the same arithmetic per point.
+    fn newton_all(&self, s: &gmsh::Session, ps: &[[f64; 3]], mut uv: Vec<[f64; 2]>, range: [[f64; 2]; 2]) -> Result<Vec<Option<Foot>>, CadError> {
+        let k = self.dim as usize;
+        // Gmsh's second derivatives per point: x_tt, or x_uu, x_vv, x_uv
+        let seconds = if k == 1 { 1 } else { 3 };
+        let args = |at: &[usize], uv: &[[f64; 2]]| -> Vec<f64> { at.iter().flat_map(|&i| uv[i][..k].to_vec()).collect() };
+        let short = |call: &str, v: &[f64], per: usize, n: usize| -> Result<(), CadError> {
+            if v.len() < per * n {
+                return Err(CadError::Gmsh { call: call.into(), message: format!("{} values for {n} points of entity ({}, {})", v.len(), self.dim, self.tag) });
+            }
+            Ok(())
+        };
+        let mut active: Vec<usize> = (0..ps.len()).collect();
+        let v = s.value(self.dim, self.tag, &args(&active, &uv))?;
+        short("gmshModelGetValue", &v, 3, active.len())?;
+        let mut x: Vec<[f64; 3]> = (0..ps.len()).map(|j| [v[3 * j], v[3 * j + 1], v[3 * j + 2]]).collect();
+        let mut converged: Vec<usize> = Vec::new();
+        for _ in 0..16 {
+            if active.is_empty() {
+                break;
+            }
+            let at = args(&active, &uv);
+            let ds = s.derivative(self.dim, self.tag, &at)?;
+            short("gmshModelGetDerivative", &ds, 3 * k, active.len())?;
+            let dds = s.second_derivative(self.dim, self.tag, &at)?;
+            short("gmshModelGetSecondDerivative", &dds, 3 * seconds, active.len())?;
+            let mut moved = Vec::with_capacity(active.len());
+            let mut stepped = Vec::with_capacity(active.len());
+            for (j, &i) in active.iter().enumerate() {
+                let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
+                let dd = &dds[3 * seconds * j..3 * seconds * (j + 1)];
+                let r = sub(x[i], ps[i]);
+                let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
+                let step = if k == 1 {
+                    let h = dot(d[0], d[0]) + dot(second(0), r);
+                    // (NaN included)
+                    if h.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                        continue;
+                    }
+                    [-dot(d[0], r) / h, 0.0]
+                } else {
+                    let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
+                    let det = huu * hvv - huv * huv;
+                    if !(huu > 0.0 && det > 0.0) {
+                        continue;
+                    }
+                    let (gu, gv) = (dot(d[0], r), dot(d[1], r));
+                    [-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det]
+                };
+                let next: [f64; 2] = std::array::from_fn(|l| if l < k { (uv[i][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 });
+                // across the range's side: Gmsh's projection finds the foot
+                if (0..k).any(|l| next[l] != uv[i][l] + step[l]) {
+                    continue;
+                }
+                moved.push((0..k).map(|l| (next[l] - uv[i][l]).abs() * norm(d[l])).fold(0.0, f64::max));
+                uv[i] = next;
+                stepped.push(i);
+            }
+            let v = s.value(self.dim, self.tag, &args(&stepped, &uv))?;
+            short("gmshModelGetValue", &v, 3, stepped.len())?;
+            active.clear();
+            for (j, &i) in stepped.iter().enumerate() {
+                x[i] = [v[3 * j], v[3 * j + 1], v[3 * j + 2]];
+                if moved[j] <= 1e-10 * (1.0 + norm(ps[i])) {
+                    converged.push(i);
+                } else {
+                    active.push(i);
+                }
+            }
+        }
+        let mut out: Vec<Option<Foot>> = (0..ps.len()).map(|_| None).collect();
+        if !converged.is_empty() {
+            let ds = s.derivative(self.dim, self.tag, &args(&converged, &uv))?;
+            short("gmshModelGetDerivative", &ds, 3 * k, converged.len())?;
+            for (j, &i) in converged.iter().enumerate() {
+                out[i] = Some(Foot { x: x[i], uv: uv[i], d: tangents(&ds[3 * k * j..3 * k * (j + 1)], k) });
+            }
+        }
+        Ok(out)
+    }
+
     /// The foot of `p` and the normal there: Newton's method from the foot
     /// of a query in `p`'s seed cell, else from Gmsh's projection (70 µs
     /// on a B-spline face against a few µs for Newton's evaluations).
-    fn solve(&self, s: &gmsh::Session, known: &mut Known, p: [f64; 3], planar: bool) -> Result<([f64; 3], [f64; 3]), CadError> {
+    fn solve(&self, s: &gmsh::Session, known: &mut Known, p: [f64; 3], planar: bool) -> Result<Answer, CadError> {
         let frame = match known.frame {
             Some(f) => f,
             None => *known.frame.insert(self.frame(s)?),
         };
         let cell = p.map(|c| (c / frame.cell).floor() as i64);
-        let seeded = match known.seeds.get(&cell) {
-            Some(&uv) => self.newton(s, p, uv, frame.range, false)?,
+        // the seed of p's own cell, else of the nearest cell around it
+        // holding one (a point just across a cell's side from earlier
+        // queries would otherwise go to Gmsh's projection, 5-10 times the
+        // cost of Newton's steps: a third of the torus's queries did)
+        let seeded = match seed_near(&known.seeds, cell) {
+            Some(uv) => self.newton(s, p, uv, frame.range, false)?,
             None => None,
         };
         let foot = match seeded {
@@ -358,7 +654,7 @@ impl CadShape {
         };
         known.seeds.insert(cell, foot.uv);
         let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
-        Ok((foot.x, n))
+        Ok((foot.x, n, foot.uv))
     }
 
     /// The entity's parameter range, seed cell, and normal sign.
@@ -511,6 +807,17 @@ impl<const D: usize> ClosestPoint<D> for CadShape {
         drop_to(self.project(lift(p), D == 2).1)
     }
 
+    fn closest_points(&self, ps: &[[f64; D]]) -> Vec<[f64; D]> {
+        let lifted: Vec<[f64; 3]> = ps.iter().map(|&p| lift(p)).collect();
+        self.project_all(&lifted, D == 2).into_iter().map(|r| drop_to(r.0)).collect()
+    }
+
+    fn foot_speeds(&self, ps: &[[f64; D]], dirs: &[[f64; D]]) -> Vec<Option<[f64; D]>> {
+        let lifted: Vec<[f64; 3]> = ps.iter().map(|&p| lift(p)).collect();
+        let dirs: Vec<[f64; 3]> = dirs.iter().map(|&p| lift(p)).collect();
+        CadShape::foot_speeds(self, &lifted, &dirs, D == 2).into_iter().map(|v| v.map(drop_to)).collect()
+    }
+
     /// By Newton's method on the signed distance along the ray (CAD parts
     /// are bound by closest points; this answers a ray asked of one).
     fn ray_hit(&self, origin: [f64; D], dir: [f64; D]) -> Option<[f64; D]> {
@@ -537,3 +844,4 @@ impl<const D: usize> ClosestPoint<D> for CadShape {
         None
     }
 }
+
