@@ -516,8 +516,8 @@ fn meetings<const D: usize>(
     pairs.dedup();
     let mut curves: Curves = HashMap::new();
     for &t in pairs.iter().flat_map(|(a, b)| [a, b]) {
-        if !curves.contains_key(&t) {
-            curves.insert(t, model.boundary(2, t)?);
+        if let std::collections::hash_map::Entry::Vacant(v) = curves.entry(t) {
+            v.insert(model.boundary(2, t)?);
         }
     }
     let mut along: HashMap<(i32, i32), Vec<i32>> = HashMap::new();

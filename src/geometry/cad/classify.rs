@@ -229,6 +229,10 @@ fn nodes_of(b: Boundary, e: &MeshEntity) -> (Vec<usize>, f64) {
     (v, pad)
 }
 
+/// A model entity's tag, the nodes of a mesh entity it holds (sorted)
+/// and their distances from it.
+type Held = (i32, Vec<usize>, Vec<f64>);
+
 /// The model's entity that holds all of `e`: every node within its
 /// tolerance, every facet's centroid over the trimmed entity. The guess
 /// if it does; else the one nearest the centroids. With it, `e`'s nodes
@@ -238,7 +242,7 @@ fn whole(
     c: &Candidates,
     b: Boundary,
     e: &MeshEntity,
-) -> Result<Option<(i32, Vec<usize>, Vec<f64>)>, CadError> {
+) -> Result<Option<Held>, CadError> {
     let (nodes, pad) = nodes_of(b, e);
     let bx = bounds(nodes.iter().map(|&n| b.nodes[n]));
     let mut order: Vec<usize> = (0..c.tags.len())
