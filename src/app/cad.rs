@@ -98,7 +98,10 @@ pub fn bind<const D: usize>(
     let gmsh = |e: crate::geometry::cad::CadError| err(e.to_string());
     let kind_word = if D == 2 { "curve" } else { "surface" };
     let mesh = MeshFacets::new(layout, facets, D - 1);
-    let lifted: Vec<[f64; 3]> = nodes.iter().map(|&p| lift(p)).collect();
+    let lifted: Vec<[f64; 3]> = nodes
+        .iter()
+        .map(|&p| crate::geometry::cad::lift(p))
+        .collect();
     let tol = tolerances(&mesh.facets, &lifted, tolerance);
     let boundary = Boundary {
         nodes: &lifted,
@@ -205,10 +208,6 @@ pub fn bind<const D: usize>(
         bound,
         onto,
     })
-}
-
-fn lift<const D: usize>(p: [f64; D]) -> [f64; 3] {
-    std::array::from_fn(|k| if k < D { p[k] } else { 0.0 })
 }
 
 /// Per node, how far it may lie from its entity: `tolerance` times its
@@ -605,13 +604,17 @@ fn check_meetings(
         }
         match best {
             Some((d, q, c)) if d <= b.tolerance[n] => {
-                // a corner: the curve's end point, if the node is at it
-                let ends = model.boundary(1, c).map_err(|e| e.to_string())?;
-                let corner = ends
-                    .iter()
-                    .filter_map(|&e| model.point(e).ok())
-                    .find(|p| crate::numeric::dist2(*p, b.nodes[n]).sqrt() <= b.tolerance[n]);
-                onto.push((n, if on.len() > 2 { corner.unwrap_or(q) } else { q }));
+                // a corner (three faces or more): the curve's end point,
+                // if the node is at it
+                let corner = if on.len() > 2 {
+                    let ends = model.boundary(1, c).map_err(|e| e.to_string())?;
+                    ends.iter()
+                        .filter_map(|&e| model.point(e).ok())
+                        .find(|p| crate::numeric::dist2(*p, b.nodes[n]).sqrt() <= b.tolerance[n])
+                } else {
+                    None
+                };
+                onto.push((n, corner.unwrap_or(q)));
             }
             _ => {
                 let list: Vec<String> = on.iter().map(|t| format!("surface {t}")).collect();

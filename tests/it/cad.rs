@@ -18,6 +18,14 @@ fn primitives(dir: &std::path::Path) -> std::sync::Arc<CadModel> {
     CadModel::open(&step, Some(&common::gmsh_lib())).unwrap()
 }
 
+/// The square [-2, 2]² minus the disk r = 0.5 of tests/python/cad_primitives.py
+/// in `dir`: its STEP file and its mesh.
+fn disk(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (step, mesh) = (dir.join("disk.step"), dir.join("disk.msh"));
+    common::run_script("cad_primitives.py", &[std::ffi::OsStr::new("disk"), step.as_os_str(), mesh.as_os_str()]);
+    (step, mesh)
+}
+
 fn surface_of_type(model: &std::sync::Arc<CadModel>, ty: &str) -> CadShape {
     let tag = model
         .entities(2)
@@ -278,15 +286,7 @@ fn the_full_wing_at_p3_fits_its_nose_closer_than_gmsh() {
 #[test]
 fn a_step_circle_and_the_exact_circle_curve_a_mesh_alike() {
     let dir = tempfile::tempdir().unwrap();
-    let (step, mesh) = (dir.path().join("disk.step"), dir.path().join("disk.msh"));
-    common::run_script(
-        "cad_primitives.py",
-        &[
-            std::ffi::OsStr::new("disk"),
-            step.as_os_str(),
-            mesh.as_os_str(),
-        ],
-    );
+    let (step, mesh) = disk(dir.path());
     // without physical groups the circle is entity 5: `curve5`
     let circle = "[[group]]\nname = \"curve5\"\nkind = \"curve\"\nshape = { type = \"circle\", centre = [0.0, 0.0], radius = 0.5 }\n";
     for p in [2, 3] {
@@ -456,15 +456,7 @@ fn a_mesh_in_millimetres_of_a_model_in_metres_is_refused_with_the_factor() {
 #[test]
 fn a_mesh_of_another_model_is_refused_naming_the_entity_and_the_distance() {
     let dir = tempfile::tempdir().unwrap();
-    let (disk_step, disk_mesh) = (dir.path().join("disk.step"), dir.path().join("disk.msh"));
-    common::run_script(
-        "cad_primitives.py",
-        &[
-            std::ffi::OsStr::new("disk"),
-            disk_step.as_os_str(),
-            disk_mesh.as_os_str(),
-        ],
-    );
+    let (disk_step, disk_mesh) = disk(dir.path());
     let (_, step, _) = model(dir.path(), "naca2d", &["--renumber"]);
     // the disk's mesh against the airfoil's model
     let e = curve_cad(dir.path(), &disk_mesh, Some(&step), None, 2)

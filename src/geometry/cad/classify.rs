@@ -128,6 +128,12 @@ pub fn classify(
         .collect())
 }
 
+/// Candidate `i`'s box grown by `pad` and by 1e-9 of its size (OCC's
+/// boxes are tight to round-off).
+fn grown(c: &Candidates, i: usize, pad: f64) -> [[f64; 3]; 2] {
+    padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i]))
+}
+
 /// The box `bx` grown by `pad` on every side.
 fn padded(bx: [[f64; 3]; 2], pad: f64) -> [[f64; 3]; 2] {
     [bx[0].map(|x| x - pad), bx[1].map(|x| x + pad)]
@@ -246,7 +252,7 @@ fn whole(
     let (nodes, pad) = nodes_of(b, e);
     let bx = bounds(nodes.iter().map(|&n| b.nodes[n]));
     let mut order: Vec<usize> = (0..c.tags.len())
-        .filter(|&i| contains(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), bx))
+        .filter(|&i| contains(grown(c, i, pad), bx))
         .collect();
     // the guess first: where it holds, nothing else is asked
     order.sort_by_key(|&i| Some(c.tags[i]) != e.guess);
@@ -306,18 +312,14 @@ fn by_facet(
         nodes.iter().enumerate().map(|(k, &n)| (n, k)).collect();
     let bx = bounds(nodes.iter().map(|&n| b.nodes[n]));
     let near: Vec<usize> = (0..c.tags.len())
-        .filter(|&i| meets(padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])), bx))
+        .filter(|&i| meets(grown(c, i, pad), bx))
         .collect();
     // per candidate, the distance of each node in its box (else infinite)
     let mut d = vec![vec![f64::INFINITY; nodes.len()]; near.len()];
     for (j, &i) in near.iter().enumerate() {
+        let held = grown(c, i, pad);
         let inside: Vec<usize> = (0..nodes.len())
-            .filter(|&k| {
-                contains(
-                    padded(c.boxes[i], pad + 1e-9 * span(c.boxes[i])),
-                    [b.nodes[nodes[k]]; 2],
-                )
-            })
+            .filter(|&k| contains(held, [b.nodes[nodes[k]]; 2]))
             .collect();
         let points: Vec<[f64; 3]> = inside.iter().map(|&k| b.nodes[nodes[k]]).collect();
         let mut got = distances(model, c.dim, c.tags[i], &points)?;

@@ -790,7 +790,8 @@ fn curve_normal(t: [f64; 3], d: [f64; 3], planar: bool) -> [f64; 3] {
     unit(cross3(tu, axis))
 }
 
-fn lift<const D: usize>(p: [f64; D]) -> [f64; 3] {
+/// `p` in 3D (z = 0 for a point of the plane).
+pub(crate) fn lift<const D: usize>(p: [f64; D]) -> [f64; 3] {
     std::array::from_fn(|i| if i < D { p[i] } else { 0.0 })
 }
 
