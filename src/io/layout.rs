@@ -290,15 +290,17 @@ impl Layout {
     /// dimension `D − 1`, each once, for the writers of formats without
     /// entities: with the attribute of every cell and boundary element
     /// (the first physical tag of its entity, else the entity's tag: the
-    /// numbers solvers key on) and, as the boundary parts, the names of
-    /// those groups (`surface<tag>` / `curve<tag>` for an entity in none).
+    /// numbers solvers key on; 1 for an element of entity 0, as a mesh
+    /// from a tool that writes no tags has, MFEM's attribute for an element
+    /// of no group) and, as the boundary parts, the names of those groups
+    /// (`surface<tag>` / `curve<tag>` for an entity in none).
     pub fn as_mesh<const D: usize>(&self) -> (CurvedMesh<D>, Vec<i64>, Vec<i64>) {
         let mut cells: Vec<&Element> = self.elements.iter().filter(|e| e.shape.dim() == D).collect();
         cells.sort_by_key(|e| e.tag);
         let facets: Vec<&Element> = self.elements.iter().filter(|e| e.shape.dim() + 1 == D).collect();
         let attribute = |dim: usize, entity: i64| {
             let e = self.entities.iter().find(|x| x.dim == dim && x.tag == entity);
-            e.and_then(|x| x.physicals.first().copied()).unwrap_or(entity)
+            e.and_then(|x| x.physicals.first().copied()).unwrap_or(if entity > 0 { entity } else { 1 })
         };
         let mut part_names: Vec<String> = Vec::new();
         let mut part_of: HashMap<i64, usize> = HashMap::new();

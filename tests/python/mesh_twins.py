@@ -2,12 +2,14 @@
 """Twins of a Gmsh mesh as other tools would hand it over, and a
 comparison of two curved meshes element by element.
 
-  msh22 IN OUT [--one-entity]
+  msh22 IN OUT [--one-entity | --no-tags]
                        meshio reads IN and writes OUT as ASCII MSH 2.2
                        (a mesh from another tool: no $Entities; elementary
                        and physical tags as meshio keeps them; with
                        --one-entity every boundary element on elementary
-                       entity 1, as a mesher that merged the faces)
+                       entity 1, as a mesher that merged the faces; with
+                       --no-tags no tags at all, written as 0, as meshio
+                       writes a mesh it read from a format without them)
   scaled IN OUT S      IN with every node's coordinates times S, written
                        by Gmsh as MSH 4.1 (a mesh in other units)
   compare A B          Gmsh reads both; the elements of the highest
@@ -15,18 +17,21 @@ comparison of two curved meshes element by element.
                        and their nodes compared; prints JSON {"elements",
                        "matched", "max_difference"}
 
-Usage: mesh_twins.py msh22 IN OUT [--one-entity] | scaled IN OUT S | compare A B"""
+Usage: mesh_twins.py msh22 IN OUT [--one-entity | --no-tags] | scaled IN OUT S | compare A B"""
 import json
 import sys
 
 import gmsh
 
 
-def msh22(src, out, one_entity=False):
+def msh22(src, out, how=None):
     import meshio
 
     m = meshio.read(src)
-    if one_entity:
+    if how == "--no-tags":
+        m.cell_data = {}
+        m.field_data = {}
+    if how == "--one-entity":
         dim = max(meshio._mesh.topological_dimension.get(c.type, 0) for c in m.cells)
         for c, tags in zip(m.cells, m.cell_data["gmsh:geometrical"]):
             if meshio._mesh.topological_dimension.get(c.type, 0) == dim - 1:
@@ -83,8 +88,8 @@ def compare(a, b):
 
 if __name__ == "__main__":
     cmd = sys.argv[1:2]
-    if cmd == ["msh22"] and len(sys.argv) in (4, 5):
-        msh22(sys.argv[2], sys.argv[3], sys.argv[4:] == ["--one-entity"])
+    if cmd == ["msh22"] and (len(sys.argv) == 4 or sys.argv[4:] in (["--one-entity"], ["--no-tags"])):
+        msh22(sys.argv[2], sys.argv[3], (sys.argv[4:] or [None])[0])
     elif cmd == ["scaled"] and len(sys.argv) == 5:
         scaled(sys.argv[2], sys.argv[3], float(sys.argv[4]))
     elif cmd == ["compare"] and len(sys.argv) == 4:

@@ -288,6 +288,9 @@ struct Frame {
     range: [[f64; 2]; 2],
     cell: f64,
     sign: f64,
+    /// Per parameter: the shape closes on itself there (a circle, a
+    /// cylinder's seam), so a foot on the seam has two parameters.
+    closed: [bool; 2],
 }
 
 /// A query's answer: the foot, the unit normal there, the foot's
@@ -534,12 +537,12 @@ impl CadShape {
             return Ok(());
         }
         let points: Vec<[f64; 3]> = seeded.iter().map(|&(i, _)| ps[i]).collect();
-        let feet = self.newton_all(s, &points, seeded.iter().map(|&(_, uv)| uv).collect(), frame.range)?;
+        let feet = self.newton_all(s, &points, seeded.iter().map(|&(_, uv)| uv).collect(), &frame)?;
         for (&(i, _), foot) in seeded.iter().zip(feet) {
             let p = ps[i];
             let foot = match foot {
                 Some(f) => f,
-                None => self.from_gmsh(s, p, frame.range)?,
+                None => self.from_gmsh(s, p, &frame)?,
             };
             known.seeds.insert(cell_of(&p), foot.uv);
             let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
@@ -551,17 +554,13 @@ impl CadShape {
     /// [`Self::newton`] (with `edge` false) of each of `ps` from its
     /// parameters in `uv`, all the points' evaluations of a step in one
     /// call of each of Gmsh's functions; the same arithmetic per point.
-    fn newton_all(&self, s: &gmsh::Session, ps: &[[f64; 3]], mut uv: Vec<[f64; 2]>, range: [[f64; 2]; 2]) -> Result<Vec<Option<Foot>>, CadError> {
+    fn newton_all(&self, s: &gmsh::Session, ps: &[[f64; 3]], mut uv: Vec<[f64; 2]>, frame: &Frame) -> Result<Vec<Option<Foot>>, CadError> {
+        let range = frame.range;
         let k = self.dim as usize;
         // Gmsh's second derivatives per point: x_tt, or x_uu, x_vv, x_uv
         let seconds = if k == 1 { 1 } else { 3 };
         let args = |at: &[usize], uv: &[[f64; 2]]| -> Vec<f64> { at.iter().flat_map(|&i| uv[i][..k].to_vec()).collect() };
-        let short = |call: &str, v: &[f64], per: usize, n: usize| -> Result<(), CadError> {
-            if v.len() < per * n {
-                return Err(CadError::Gmsh { call: call.into(), message: format!("{} values for {n} points of entity ({}, {})", v.len(), self.dim, self.tag) });
-            }
-            Ok(())
-        };
+        let short = |call: &str, v: &[f64], per: usize, n: usize| self.enough(call, v, per, n);
         let mut active: Vec<usize> = (0..ps.len()).collect();
         let v = s.value(self.dim, self.tag, &args(&active, &uv))?;
         short("gmshModelGetValue", &v, 3, active.len())?;
@@ -581,24 +580,7 @@ impl CadShape {
             for (j, &i) in active.iter().enumerate() {
                 let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
                 let dd = &dds[3 * seconds * j..3 * seconds * (j + 1)];
-                let r = sub(x[i], ps[i]);
-                let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
-                let step = if k == 1 {
-                    let h = dot(d[0], d[0]) + dot(second(0), r);
-                    // (NaN included)
-                    if h.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-                        continue;
-                    }
-                    [-dot(d[0], r) / h, 0.0]
-                } else {
-                    let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
-                    let det = huu * hvv - huv * huv;
-                    if !(huu > 0.0 && det > 0.0) {
-                        continue;
-                    }
-                    let (gu, gv) = (dot(d[0], r), dot(d[1], r));
-                    [-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det]
-                };
+                let Some(step) = newton_step(d, dd, sub(x[i], ps[i]), k) else { continue };
                 let next: [f64; 2] = std::array::from_fn(|l| if l < k { (uv[i][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 });
                 // across the range's side: Gmsh's projection finds the foot
                 if (0..k).any(|l| next[l] != uv[i][l] + step[l]) {
@@ -622,13 +604,64 @@ impl CadShape {
         }
         let mut out: Vec<Option<Foot>> = (0..ps.len()).map(|_| None).collect();
         if !converged.is_empty() {
-            let ds = s.derivative(self.dim, self.tag, &args(&converged, &uv))?;
-            short("gmshModelGetDerivative", &ds, 3 * k, converged.len())?;
-            for (j, &i) in converged.iter().enumerate() {
-                out[i] = Some(Foot { x: x[i], uv: uv[i], d: tangents(&ds[3 * k * j..3 * k * (j + 1)], k) });
+            let points: Vec<[f64; 3]> = converged.iter().map(|&i| ps[i]).collect();
+            let feet = self.settle(s, &points, converged.iter().map(|&i| uv[i]).collect(), frame)?;
+            for (&i, foot) in converged.iter().zip(feet) {
+                out[i] = Some(foot);
             }
         }
         Ok(out)
+    }
+
+    /// The feet of `ps` from parameters `uv` that Newton's method has
+    /// converged to, made a function of the point alone: the parameters
+    /// put on a grid of 2⁻³⁰ of the range, then one more Newton step.
+    /// Why: Newton's method from two seeds (a seed is the foot of whichever
+    /// point of its cell was asked first, which depends on the order of the
+    /// queries) ends a few ulps apart, and the fit's later steps carried
+    /// that to 1.1e-11 of the model between two runs of the same file. The
+    /// grid's half-step (5e-10 of the range) is squared by the step, far
+    /// under round-off; only a foot within ulps of a grid line's midpoint
+    /// can still differ. A foot on a closed shape's seam is given the
+    /// range's low end ([`on_seam`]).
+    fn settle(&self, s: &gmsh::Session, ps: &[[f64; 3]], uv: Vec<[f64; 2]>, frame: &Frame) -> Result<Vec<Foot>, CadError> {
+        let range = frame.range;
+        let k = self.dim as usize;
+        let seconds = if k == 1 { 1 } else { 3 };
+        let n = ps.len();
+        let flat = |uv: &[[f64; 2]]| -> Vec<f64> { uv.iter().flat_map(|u| u[..k].to_vec()).collect() };
+        let uv: Vec<[f64; 2]> = uv.into_iter().map(|u| on_grid(u, range, k)).collect();
+        let v = s.value(self.dim, self.tag, &flat(&uv))?;
+        self.enough("gmshModelGetValue", &v, 3, n)?;
+        let ds = s.derivative(self.dim, self.tag, &flat(&uv))?;
+        self.enough("gmshModelGetDerivative", &ds, 3 * k, n)?;
+        let dds = s.second_derivative(self.dim, self.tag, &flat(&uv))?;
+        self.enough("gmshModelGetSecondDerivative", &dds, 3 * seconds, n)?;
+        let next: Vec<[f64; 2]> = (0..n)
+            .map(|j| {
+                let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
+                let r = sub([v[3 * j], v[3 * j + 1], v[3 * j + 2]], ps[j]);
+                let at = match newton_step(d, &dds[3 * seconds * j..3 * seconds * (j + 1)], r, k) {
+                    Some(step) => std::array::from_fn(|l| if l < k { (uv[j][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 }),
+                    None => uv[j],
+                };
+                on_seam(at, frame, k)
+            })
+            .collect();
+        let v = s.value(self.dim, self.tag, &flat(&next))?;
+        self.enough("gmshModelGetValue", &v, 3, n)?;
+        let ds = s.derivative(self.dim, self.tag, &flat(&next))?;
+        self.enough("gmshModelGetDerivative", &ds, 3 * k, n)?;
+        Ok((0..n).map(|j| Foot { x: [v[3 * j], v[3 * j + 1], v[3 * j + 2]], uv: next[j], d: tangents(&ds[3 * k * j..3 * k * (j + 1)], k) }).collect())
+    }
+
+    /// An error unless Gmsh's `call` answered `per` values for each of `n`
+    /// points.
+    fn enough(&self, call: &str, v: &[f64], per: usize, n: usize) -> Result<(), CadError> {
+        if v.len() < per * n {
+            return Err(CadError::Gmsh { call: call.into(), message: format!("{} values for {n} points of entity ({}, {})", v.len(), self.dim, self.tag) });
+        }
+        Ok(())
     }
 
     /// The foot of `p` and the normal there: Newton's method from the foot
@@ -645,12 +678,12 @@ impl CadShape {
         // queries would otherwise go to Gmsh's projection, 5-10 times the
         // cost of Newton's steps: a third of the torus's queries did)
         let seeded = match seed_near(&known.seeds, cell) {
-            Some(uv) => self.newton(s, p, uv, frame.range, false)?,
+            Some(uv) => self.newton(s, p, uv, &frame, false)?,
             None => None,
         };
         let foot = match seeded {
             Some(f) => f,
-            None => self.from_gmsh(s, p, frame.range)?,
+            None => self.from_gmsh(s, p, &frame)?,
         };
         known.seeds.insert(cell, foot.uv);
         let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
@@ -673,13 +706,40 @@ impl CadShape {
             let n = s.normal(self.tag, &mid)?;
             sign = if dot(c, [n[0], n[1], n[2]]) < 0.0 { -1.0 } else { 1.0 };
         }
-        Ok(Frame { range, cell, sign })
+        let closed = self.closed(s, range, norm(sub(b1, b0)))?;
+        Ok(Frame { range, cell, sign, closed })
+    }
+
+    /// Whether the shape meets itself across each parameter's range: its
+    /// points at the range's two ends (at three places along the other
+    /// parameter of a surface) within 1e-12 of its size.
+    fn closed(&self, s: &gmsh::Session, range: [[f64; 2]; 2], size: f64) -> Result<[bool; 2], CadError> {
+        let k = self.dim as usize;
+        let mut out = [false; 2];
+        for (l, closed) in out.iter_mut().enumerate().take(k) {
+            let o = 1 - l;
+            let along: &[f64] = if k == 1 { &[0.0] } else { &[0.2, 0.5, 0.8] };
+            let mut uv = Vec::new();
+            for &w in along {
+                for end in [range[0][l], range[1][l]] {
+                    let mut q = [0.0; 2];
+                    q[l] = end;
+                    q[o] = range[0][o] + w * (range[1][o] - range[0][o]);
+                    uv.extend_from_slice(&q[..k]);
+                }
+            }
+            let v = s.value(self.dim, self.tag, &uv)?;
+            self.enough("gmshModelGetValue", &v, 3, 2 * along.len())?;
+            *closed = v.chunks(6).all(|e| norm(sub([e[0], e[1], e[2]], [e[3], e[4], e[5]])) <= 1e-12 * size);
+        }
+        Ok(out)
     }
 
     /// Gmsh's projection of `p`, polished by Newton's method (its own is
     /// only about 1e-9 of the model's size close; on curves its parameter
     /// is mostly 0, and at a curve's end it may answer the other end).
-    fn from_gmsh(&self, s: &gmsh::Session, p: [f64; 3], range: [[f64; 2]; 2]) -> Result<Foot, CadError> {
+    fn from_gmsh(&self, s: &gmsh::Session, p: [f64; 3], frame: &Frame) -> Result<Foot, CadError> {
+        let range = frame.range;
         let (x, uv) = s.closest(self.dim, self.tag, &p)?;
         let k = self.dim as usize;
         if x.len() < 3 || uv.len() < k {
@@ -699,8 +759,12 @@ impl CadShape {
                 }
             }
         }
-        if let Some(f) = self.newton(s, p, start.1, range, true)? {
-            if norm(sub(p, f.x)) <= norm(sub(p, start.0)) {
+        if let Some(f) = self.newton(s, p, start.1, frame, true)? {
+            // Newton's foot unless it is another, farther one: a point on
+            // the shape is at round-off from both, and taking Gmsh's there
+            // made the foot depend on whether a seed was near (the order of
+            // the queries)
+            if norm(sub(p, f.x)) <= norm(sub(p, start.0)) + 1e-12 * (1.0 + norm(p)) {
                 return Ok(f);
             }
         }
@@ -714,30 +778,14 @@ impl CadShape {
     /// step beyond the range is cut back to it only where `edge` allows;
     /// else None: across a closed curve's or surface's seam the foot is on
     /// the range's other side, which Gmsh's projection finds.
-    fn newton(&self, s: &gmsh::Session, p: [f64; 3], mut uv: [f64; 2], range: [[f64; 2]; 2], edge: bool) -> Result<Option<Foot>, CadError> {
+    fn newton(&self, s: &gmsh::Session, p: [f64; 3], mut uv: [f64; 2], frame: &Frame, edge: bool) -> Result<Option<Foot>, CadError> {
+        let range = frame.range;
         let k = self.dim as usize;
         let mut x = s.value(self.dim, self.tag, &uv[..k])?;
         for _ in 0..16 {
             let d = tangents(&s.derivative(self.dim, self.tag, &uv[..k])?, k);
             let dd = s.second_derivative(self.dim, self.tag, &uv[..k])?;
-            let r = sub([x[0], x[1], x[2]], p);
-            let second = |j: usize| [dd[3 * j], dd[3 * j + 1], dd[3 * j + 2]];
-            let step = if k == 1 {
-                let h = dot(d[0], d[0]) + dot(second(0), r);
-                if !(h > 0.0) {
-                    return Ok(None);
-                }
-                [-dot(d[0], r) / h, 0.0]
-            } else {
-                // x_uu, x_vv, x_uv
-                let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
-                let det = huu * hvv - huv * huv;
-                if !(huu > 0.0 && det > 0.0) {
-                    return Ok(None);
-                }
-                let (gu, gv) = (dot(d[0], r), dot(d[1], r));
-                [-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det]
-            };
+            let Some(step) = newton_step(d, &dd, sub([x[0], x[1], x[2]], p), k) else { return Ok(None) };
             let next: [f64; 2] = std::array::from_fn(|j| if j < k { (uv[j] + step[j]).clamp(range[0][j].min(range[1][j]), range[0][j].max(range[1][j])) } else { 0.0 });
             if !edge && (0..k).any(|j| next[j] != uv[j] + step[j]) {
                 return Ok(None);
@@ -748,8 +796,7 @@ impl CadShape {
             // converging quadratically: after a step this short the foot
             // is at round-off (a tighter test would wait on round-off noise)
             if moved <= 1e-10 * (1.0 + norm(p)) {
-                let d = tangents(&s.derivative(self.dim, self.tag, &uv[..k])?, k);
-                return Ok(Some(Foot { x: [x[0], x[1], x[2]], uv, d }));
+                return Ok(self.settle(s, &[p], vec![uv], frame)?.pop());
             }
         }
         Ok(None)
@@ -766,6 +813,51 @@ impl CadShape {
         let n = s.normal(self.tag, &foot.uv)?;
         Ok([n[0], n[1], n[2]])
     }
+}
+
+/// Newton's step on |S − p|² in the parameters, where S has the
+/// tangents `d`, the second derivatives `dd` (x_tt, or x_uu, x_vv, x_uv)
+/// and the offset `r` = S − p; None where the Hessian is not positive
+/// (NaN included): a point near the medial axis.
+fn newton_step(d: [[f64; 3]; 2], dd: &[f64], r: [f64; 3], k: usize) -> Option<[f64; 2]> {
+    let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
+    if k == 1 {
+        let h = dot(d[0], d[0]) + dot(second(0), r);
+        return (h > 0.0).then(|| [-dot(d[0], r) / h, 0.0]);
+    }
+    let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
+    let det = huu * hvv - huv * huv;
+    let (gu, gv) = (dot(d[0], r), dot(d[1], r));
+    (huu > 0.0 && det > 0.0).then(|| [-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det])
+}
+
+/// `uv` on the grid of 2⁻³⁰ of the parameter range (a power of two, so
+/// the grid's points are exact), kept in the range ([`CadShape::settle`]).
+fn on_grid(uv: [f64; 2], range: [[f64; 2]; 2], k: usize) -> [f64; 2] {
+    std::array::from_fn(|l| {
+        let (lo, hi) = (range[0][l].min(range[1][l]), range[0][l].max(range[1][l]));
+        let h = (hi - lo) * (-30f64).exp2();
+        if l >= k || !(h > 0.0) || !h.is_finite() {
+            return uv[l];
+        }
+        (lo + ((uv[l] - lo) / h).round() * h).clamp(lo, hi)
+    })
+}
+
+/// `uv` with each closed parameter within 1e-14 of its range of the
+/// seam put at the range's low end. Why: a mesh vertex on a circle's seam
+/// converges to 0 or to 2π (a few ulps inside) depending on its seed, and
+/// the two ends' points differ in round-off, enough to turn a fit.
+fn on_seam(uv: [f64; 2], frame: &Frame, k: usize) -> [f64; 2] {
+    std::array::from_fn(|l| {
+        let (lo, hi) = (frame.range[0][l].min(frame.range[1][l]), frame.range[0][l].max(frame.range[1][l]));
+        let near = 1e-14 * (hi - lo);
+        if l < k && frame.closed[l] && (uv[l] - lo <= near || hi - uv[l] <= near) {
+            lo
+        } else {
+            uv[l]
+        }
+    })
 }
 
 /// Gmsh's first derivatives (x_u, then x_v for a surface) as vectors.
