@@ -31,6 +31,9 @@ Gmsh does by default), wing, farfield, ends and fluid for the wing.
 Gmsh tutorials do (its entity tags are not those of the STEP read again:
 `--cad` binds it by geometry); Gmsh's own curving (--peers) then runs on
 the model built again in its session.
+--merge MESH: with --peers, Gmsh's curving of MESH (a mesh this script
+made before, so that both sides curve the very same file: Gmsh's boundary
+layer meshing is not repeatable to the element), nothing meshed or written.
 --peers P: Gmsh's own curving of the same mesh on the same CAD (setOrder
 P, and with --methods also HighOrderFastCurving / HighOrderElastic),
 each from the linear mesh, judged as check_cad.py judges ours; prints
@@ -38,7 +41,8 @@ JSON {method: {"invalid", "min_sj", "min_det_jac",
 "boundary_sample_distance", "seconds", "elements"}}.
 
 Usage: cad_models.py KIND DIR [--size S] [--far F] [--first H] [--renumber]
-                     [--peers P] [--methods setorder,fastcurving,elastic]"""
+                     [--peers P] [--methods setorder,fastcurving,elastic]
+                     [--merge MESH]"""
 import argparse
 import json
 import math
@@ -62,6 +66,7 @@ ap.add_argument("--first", type=float)
 ap.add_argument("--renumber", action="store_true")
 ap.add_argument("--peers", type=int)
 ap.add_argument("--methods", default="setorder")
+ap.add_argument("--merge")
 a = ap.parse_args()
 size, far, first = (v if v is not None else d for v, d in zip((a.size, a.far, a.first), DEFAULTS[a.kind]))
 step = os.path.join(a.dir, a.kind + ".step")
@@ -264,7 +269,7 @@ def peers(p):
                 gmsh.model.occ.synchronize()
         else:
             gmsh.open(model)
-        gmsh.merge(msh)
+        gmsh.merge(a.merge or msh)
         t0 = time.perf_counter()
         gmsh.model.mesh.setOrder(p)
         if method != "setorder":
@@ -287,8 +292,9 @@ if not a.renumber:
     # as a user would: the STEP opened and meshed in a model of its own
     gmsh.clear()
     gmsh.open(step)
-mesh()
-gmsh.write(msh)
+if not a.merge:
+    mesh()
+    gmsh.write(msh)
 if a.peers:
     print(json.dumps(peers(a.peers)))
 gmsh.finalize()
