@@ -542,7 +542,7 @@ impl CadShape {
             let p = ps[i];
             let foot = match foot {
                 Some(f) => f,
-                None => self.from_gmsh(s, p, &frame)?,
+                None => self.gmsh_foot(s, p, &frame)?,
             };
             known.seeds.insert(cell_of(&p), foot.uv);
             let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
@@ -683,7 +683,7 @@ impl CadShape {
         };
         let foot = match seeded {
             Some(f) => f,
-            None => self.from_gmsh(s, p, &frame)?,
+            None => self.gmsh_foot(s, p, &frame)?,
         };
         known.seeds.insert(cell, foot.uv);
         let n = if self.dim == 2 { self.surface_normal(s, &foot, frame.sign)? } else { curve_normal(foot.d[0], sub(p, foot.x), planar) };
@@ -738,7 +738,7 @@ impl CadShape {
     /// Gmsh's projection of `p`, polished by Newton's method (its own is
     /// only about 1e-9 of the model's size close; on curves its parameter
     /// is mostly 0, and at a curve's end it may answer the other end).
-    fn from_gmsh(&self, s: &gmsh::Session, p: [f64; 3], frame: &Frame) -> Result<Foot, CadError> {
+    fn gmsh_foot(&self, s: &gmsh::Session, p: [f64; 3], frame: &Frame) -> Result<Foot, CadError> {
         let range = frame.range;
         let (x, uv) = s.closest(self.dim, self.tag, &p)?;
         let k = self.dim as usize;
@@ -837,7 +837,7 @@ fn on_grid(uv: [f64; 2], range: [[f64; 2]; 2], k: usize) -> [f64; 2] {
     std::array::from_fn(|l| {
         let (lo, hi) = (range[0][l].min(range[1][l]), range[0][l].max(range[1][l]));
         let h = (hi - lo) * (-30f64).exp2();
-        if l >= k || !(h > 0.0) || !h.is_finite() {
+        if l >= k || h.is_nan() || h <= 0.0 || h.is_infinite() {
             return uv[l];
         }
         (lo + ((uv[l] - lo) / h).round() * h).clamp(lo, hi)
