@@ -416,6 +416,23 @@ fn a_mesh_in_millimetres_of_a_model_in_metres_is_refused_with_the_factor() {
         e.contains("scaled by 1000") && e.contains("millimetres") && e.contains("--cad-scale 1000"),
         "{e}"
     );
+    // the command line: exit 1 (bad input), the factor on stderr
+    let cli = std::process::Command::new(env!("CARGO_BIN_EXE_deformesh"))
+        .arg("curve")
+        .arg(&mm)
+        .arg("--cad")
+        .arg(&step)
+        .args(["--order", "2", "-o"])
+        .arg(dir.path().join("naca2d_mm_cli.msh"))
+        .env("DEFORMESH_GMSH_LIB", common::gmsh_lib())
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&cli.stderr);
+    assert!(cli.status.code() == Some(1) && said.contains("--cad-scale 1000"), "{:?}: {said}", cli.status);
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().all(|f| !f.unwrap().file_name().to_string_lossy().contains("_cli")),
+        "nothing written by the command line"
+    );
     assert!(
         std::fs::read_dir(dir.path()).unwrap().all(|f| !f
             .unwrap()
