@@ -53,6 +53,20 @@ pub use crate::mesh::element::Shape;
 
 /// The tensor-product shape of dimension `dim` (0..=3): a generated
 /// mesh's elements.
+/// `attributes` with every one under 1 (entity 0 in no group) made 1, or
+/// the largest in use plus one where 1 is taken: the writers' attributes
+/// must be positive, and those elements must not join another group.
+fn positive(mut attributes: Vec<i64>) -> Vec<i64> {
+    if attributes.iter().all(|&a| a > 0) {
+        return attributes;
+    }
+    let free = if attributes.contains(&1) { attributes.iter().max().map_or(1, |m| m.max(&0) + 1) } else { 1 };
+    for a in attributes.iter_mut().filter(|a| **a <= 0) {
+        *a = free;
+    }
+    attributes
+}
+
 fn tensor_of_dim(dim: usize) -> Shape {
     [Shape::Point, Shape::Line, Shape::Quadrilateral, Shape::Hexahedron][dim.min(3)]
 }
@@ -290,9 +304,10 @@ impl Layout {
     /// dimension `D − 1`, each once, for the writers of formats without
     /// entities: with the attribute of every cell and boundary element
     /// (the first physical tag of its entity, else the entity's tag: the
-    /// numbers solvers key on; 1 for an element of entity 0, as a mesh
-    /// from a tool that writes no tags has, MFEM's attribute for an element
-    /// of no group) and, as the boundary parts, the names of those groups
+    /// numbers solvers key on; an element of entity 0 in no group, as a
+    /// mesh from a tool that writes no tags has, gets 1, MFEM's attribute
+    /// for an element of no group, or the largest in use plus one where 1
+    /// is taken) and, as the boundary parts, the names of those groups
     /// (`surface<tag>` / `curve<tag>` for an entity in none).
     pub fn as_mesh<const D: usize>(&self) -> (CurvedMesh<D>, Vec<i64>, Vec<i64>) {
         let mut cells: Vec<&Element> = self.elements.iter().filter(|e| e.shape.dim() == D).collect();
@@ -300,7 +315,7 @@ impl Layout {
         let facets: Vec<&Element> = self.elements.iter().filter(|e| e.shape.dim() + 1 == D).collect();
         let attribute = |dim: usize, entity: i64| {
             let e = self.entities.iter().find(|x| x.dim == dim && x.tag == entity);
-            e.and_then(|x| x.physicals.first().copied()).unwrap_or(if entity > 0 { entity } else { 1 })
+            e.and_then(|x| x.physicals.first().copied()).unwrap_or(entity)
         };
         let mut part_names: Vec<String> = Vec::new();
         let mut part_of: HashMap<i64, usize> = HashMap::new();
@@ -316,6 +331,7 @@ impl Layout {
             boundary.push(f.shape, &f.nodes, part);
             boundary_attributes.push(a);
         }
+        let boundary_attributes = positive(boundary_attributes);
         let mesh = CurvedMesh {
             shape: cells.first().map_or(tensor_of_dim(D), |c| c.shape),
             p: cells.first().map_or(1, |c| c.order),
@@ -326,7 +342,7 @@ impl Layout {
             boundary,
             part_names,
         };
-        let cell_attributes = cells.iter().map(|c| attribute(D, c.entity)).collect();
+        let cell_attributes = positive(cells.iter().map(|c| attribute(D, c.entity)).collect());
         (mesh, cell_attributes, boundary_attributes)
     }
 
@@ -801,6 +817,16 @@ impl PointGrid {
 /// share (`pub`: a test module as `scripts/deps.py` recognises one).
 pub mod tests {
     use super::*;
+
+    #[test]
+    fn elements_of_no_entity_get_a_positive_attribute_of_their_own() {
+        // a tagless file: all on entity 0, attribute 1 as MFEM gives
+        assert_eq!(positive(vec![0, 0]), vec![1, 1]);
+        // 1 taken by a group: the largest plus one, not merged into it
+        assert_eq!(positive(vec![1, 0, 3, -2]), vec![1, 4, 3, 4]);
+        assert_eq!(positive(vec![2, 0]), vec![2, 1]);
+        assert_eq!(positive(vec![5, 7]), vec![5, 7]);
+    }
     use crate::mesh::element::Spacing;
 
     /// A mixed mesh of order `p` (equispaced) on [0, 3] × [0, 1], its

@@ -605,7 +605,7 @@ impl CadShape {
         let mut out: Vec<Option<Foot>> = (0..ps.len()).map(|_| None).collect();
         if !converged.is_empty() {
             let points: Vec<[f64; 3]> = converged.iter().map(|&i| ps[i]).collect();
-            let feet = self.settle(s, &points, converged.iter().map(|&i| uv[i]).collect(), frame)?;
+            let feet = self.settle(s, &points, &converged.iter().map(|&i| (x[i], uv[i])).collect::<Vec<_>>(), frame)?;
             for (&i, foot) in converged.iter().zip(feet) {
                 out[i] = Some(foot);
             }
@@ -624,13 +624,14 @@ impl CadShape {
     /// under round-off; only a foot within ulps of a grid line's midpoint
     /// can still differ. A foot on a closed shape's seam is given the
     /// range's low end ([`on_seam`]).
-    fn settle(&self, s: &gmsh::Session, ps: &[[f64; 3]], uv: Vec<[f64; 2]>, frame: &Frame) -> Result<Vec<Foot>, CadError> {
+    fn settle(&self, s: &gmsh::Session, ps: &[[f64; 3]], converged: &[([f64; 3], [f64; 2])], frame: &Frame) -> Result<Vec<Foot>, CadError> {
         let range = frame.range;
         let k = self.dim as usize;
         let seconds = if k == 1 { 1 } else { 3 };
         let n = ps.len();
+        let size = frame.cell / SEED_CELL;
         let flat = |uv: &[[f64; 2]]| -> Vec<f64> { uv.iter().flat_map(|u| u[..k].to_vec()).collect() };
-        let uv: Vec<[f64; 2]> = uv.into_iter().map(|u| on_grid(u, range, k)).collect();
+        let uv: Vec<[f64; 2]> = converged.iter().map(|c| on_grid(c.1, range, k)).collect();
         let v = s.value(self.dim, self.tag, &flat(&uv))?;
         self.enough("gmshModelGetValue", &v, 3, n)?;
         let ds = s.derivative(self.dim, self.tag, &flat(&uv))?;
@@ -641,18 +642,30 @@ impl CadShape {
             .map(|j| {
                 let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
                 let r = sub([v[3 * j], v[3 * j + 1], v[3 * j + 2]], ps[j]);
-                let at = match newton_step(d, &dds[3 * seconds * j..3 * seconds * (j + 1)], r, k) {
-                    Some(step) => std::array::from_fn(|l| if l < k { (uv[j][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 }),
-                    None => uv[j],
-                };
-                on_seam(at, frame, k)
+                match newton_step(d, &dds[3 * seconds * j..3 * seconds * (j + 1)], r, k) {
+                    Some(step) => on_seam(std::array::from_fn(|l| if l < k { (uv[j][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 }), frame, k),
+                    // (a pole, the medial axis) the converged foot stands
+                    None => converged[j].1,
+                }
             })
             .collect();
         let v = s.value(self.dim, self.tag, &flat(&next))?;
         self.enough("gmshModelGetValue", &v, 3, n)?;
         let ds = s.derivative(self.dim, self.tag, &flat(&next))?;
         self.enough("gmshModelGetDerivative", &ds, 3 * k, n)?;
-        Ok((0..n).map(|j| Foot { x: [v[3 * j], v[3 * j + 1], v[3 * j + 2]], uv: next[j], d: tangents(&ds[3 * k * j..3 * k * (j + 1)], k) }).collect())
+        let mut feet: Vec<Foot> = (0..n).map(|j| Foot { x: [v[3 * j], v[3 * j + 1], v[3 * j + 2]], uv: next[j], d: tangents(&ds[3 * k * j..3 * k * (j + 1)], k) }).collect();
+        // a settled foot farther than the converged one by more than
+        // round-off went across a C0 knot or a seam that is not one (the
+        // grid's half-step on the other branch): the converged foot stands
+        let back: Vec<usize> = (0..n).filter(|&j| norm(sub(feet[j].x, ps[j])) > norm(sub(converged[j].0, ps[j])) + 1e-12 * size).collect();
+        if !back.is_empty() {
+            let ds = s.derivative(self.dim, self.tag, &flat(&back.iter().map(|&j| converged[j].1).collect::<Vec<_>>()))?;
+            self.enough("gmshModelGetDerivative", &ds, 3 * k, back.len())?;
+            for (i, &j) in back.iter().enumerate() {
+                feet[j] = Foot { x: converged[j].0, uv: converged[j].1, d: tangents(&ds[3 * k * i..3 * k * (i + 1)], k) };
+            }
+        }
+        Ok(feet)
     }
 
     /// An error unless Gmsh's `call` answered `per` values for each of `n`
@@ -730,7 +743,7 @@ impl CadShape {
             }
             let v = s.value(self.dim, self.tag, &uv)?;
             self.enough("gmshModelGetValue", &v, 3, 2 * along.len())?;
-            *closed = v.chunks(6).all(|e| norm(sub([e[0], e[1], e[2]], [e[3], e[4], e[5]])) <= 1e-12 * size);
+            *closed = v[..6 * along.len()].chunks_exact(6).all(|e| norm(sub([e[0], e[1], e[2]], [e[3], e[4], e[5]])) <= 1e-12 * size);
         }
         Ok(out)
     }
@@ -760,11 +773,13 @@ impl CadShape {
             }
         }
         if let Some(f) = self.newton(s, p, start.1, frame, true)? {
-            // Newton's foot unless it is another, farther one: a point on
-            // the shape is at round-off from both, and taking Gmsh's there
-            // made the foot depend on whether a seed was near (the order of
-            // the queries)
-            if norm(sub(p, f.x)) <= norm(sub(p, start.0)) + 1e-12 * (1.0 + norm(p)) {
+            // Newton's foot unless it is another, farther one: where the
+            // two are the same foot they tie to round-off (a point on a
+            // circle), and taking Gmsh's there made the foot depend on
+            // whether a seed was near (the order of the queries)
+            let size = frame.cell / SEED_CELL;
+            let (newton, gmsh) = (norm(sub(p, f.x)), norm(sub(p, start.0)));
+            if newton <= gmsh || (norm(sub(f.x, start.0)) <= 1e-6 * size && newton <= gmsh + 1e-12 * size) {
                 return Ok(f);
             }
         }
@@ -796,7 +811,7 @@ impl CadShape {
             // converging quadratically: after a step this short the foot
             // is at round-off (a tighter test would wait on round-off noise)
             if moved <= 1e-10 * (1.0 + norm(p)) {
-                return Ok(self.settle(s, &[p], vec![uv], frame)?.pop());
+                return Ok(self.settle(s, &[p], &[([x[0], x[1], x[2]], uv)], frame)?.pop());
             }
         }
         Ok(None)
