@@ -356,16 +356,24 @@ fn twins_differ(a: &Path, b: &Path) -> f64 {
 fn a_mesh_from_meshio_as_msh22_curves_as_the_gmsh_file_does() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, step, _) = model(dir.path(), "fillet_box", &["--renumber"]);
-    let m22 = dir.path().join("fillet_box_meshio22.msh");
-    common::run_script("mesh_twins.py", &[Path::new("msh22"), &mesh, &m22]);
+    // meshio's ASCII MSH 2.2 of the mesh (mesh_twins.py msh22, with
+    // `how`), and its curving
+    let twin = |name: &str, how: Option<&str>| {
+        let file = dir.path().join(name);
+        let mut args = vec![Path::new("msh22"), &mesh, &file];
+        args.extend(how.map(Path::new));
+        common::run_script("mesh_twins.py", &args);
+        let (r, out) = curve_cad(dir.path(), &file, Some(&step), None, 2).unwrap();
+        (file, r, out)
+    };
+    let (a, out_a) = curve_cad(dir.path(), &mesh, Some(&step), None, 2).unwrap();
+    let (m22, b, out_b) = twin("fillet_box_meshio22.msh", None);
     assert!(
         std::fs::read_to_string(&m22)
             .unwrap()
             .contains("$MeshFormat\n2.2 0 8")
             && !std::fs::read_to_string(&m22).unwrap().contains("$Entities")
     );
-    let (a, out_a) = curve_cad(dir.path(), &mesh, Some(&step), None, 2).unwrap();
-    let (b, out_b) = curve_cad(dir.path(), &m22, Some(&step), None, 2).unwrap();
     assert!(a.quality.invalid_elements.is_empty() && b.quality.invalid_elements.is_empty());
     // measured 0: a foot is a function of its point alone, whatever
     // query came first (3.8e-11 before feet were settled on a grid)
@@ -373,18 +381,14 @@ fn a_mesh_from_meshio_as_msh22_curves_as_the_gmsh_file_does() {
     assert!(d <= 1e-12, "the MSH 2.2 twin's nodes differ by {d:e}");
     // a mesher that merged the faces: one entity over all eight, bound
     // element by element
-    let one = dir.path().join("fillet_box_one_entity.msh");
-    common::run_script("mesh_twins.py", &[Path::new("msh22"), &mesh, &one, Path::new("--one-entity")]);
-    let (c, out_c) = curve_cad(dir.path(), &one, Some(&step), None, 2).unwrap();
+    let (_, c, out_c) = twin("fillet_box_one_entity.msh", Some("--one-entity"));
     let bound = &c.cad.as_ref().unwrap().bound;
     assert!(bound.len() == 1 && bound[0].model.len() == 8 && bound[0].model.values().sum::<usize>() == a.cad.as_ref().unwrap().bound.iter().map(|b| b.model.values().sum::<usize>()).sum::<usize>(), "{bound:?}");
     let d = twins_differ(&out_a, &out_c);
     assert!(d <= 1e-12, "the merged twin's nodes differ by {d:e}");
     // a tool that writes no tags at all: every element on entity 0, in no
     // group (attribute 1 in the VTU, as MFEM gives such an element)
-    let bare = dir.path().join("fillet_box_no_tags.msh");
-    common::run_script("mesh_twins.py", &[Path::new("msh22"), &mesh, &bare, Path::new("--no-tags")]);
-    let (e, out_e) = curve_cad(dir.path(), &bare, Some(&step), None, 2).unwrap();
+    let (_, e, out_e) = twin("fillet_box_no_tags.msh", Some("--no-tags"));
     let bound = &e.cad.as_ref().unwrap().bound;
     assert!(bound.len() == 1 && bound[0].model.len() == 8, "{bound:?}");
     let d = twins_differ(&out_a, &out_e);

@@ -368,6 +368,31 @@ impl std::hash::BuildHasher for Mixed {
     }
 }
 
+impl Known {
+    /// Remembers the answer `r` to the query `key`; at [`MEMO_SIZE`]
+    /// answers it first forgets them all, and the seeds.
+    fn remember(&mut self, key: [u64; 4], r: Answer) {
+        if self.memo.len() >= MEMO_SIZE {
+            self.memo.clear();
+            self.seeds.clear();
+        }
+        self.memo.insert(key, r);
+    }
+
+    /// The shape's frame, found at its first query.
+    fn frame_of(&mut self, shape: &CadShape, s: &gmsh::Session) -> Result<Frame, CadError> {
+        match self.frame {
+            Some(f) => Ok(f),
+            None => Ok(*self.frame.insert(shape.frame(s)?)),
+        }
+    }
+}
+
+/// The memo's key of a query: the point's bits, and whether in the plane.
+fn memo_key(p: &[f64; 3], planar: bool) -> [u64; 4] {
+    [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), planar as u64]
+}
+
 /// The foot of a query, its parameters and its first derivatives.
 struct Foot {
     x: [f64; 3],
@@ -390,18 +415,14 @@ impl CadShape {
     /// or for a curve the direction from the curve to `p` (in the plane:
     /// the tangent turned clockwise).
     fn project(&self, p: [f64; 3], planar: bool) -> ([f64; 3], [f64; 3]) {
-        let key = [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), planar as u64];
+        let key = memo_key(&p, planar);
         let mut known = self.known.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(&r) = known.memo.get(&key) {
             return (r.0, r.1);
         }
         match self.model.with(|s| self.solve(s, &mut known, p, planar)) {
             Ok(r) => {
-                if known.memo.len() >= MEMO_SIZE {
-                    known.memo.clear();
-                    known.seeds.clear();
-                }
-                known.memo.insert(key, r);
+                known.remember(key, r);
                 (r.0, r.1)
             }
             Err(e) => {
@@ -418,9 +439,8 @@ impl CadShape {
     /// call: one lock, one entity look-up and one array per step, not per
     /// point and step).
     fn project_all(&self, ps: &[[f64; 3]], planar: bool) -> Vec<Answer> {
-        let key = |p: &[f64; 3]| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), planar as u64];
         let mut known = self.known.lock().unwrap_or_else(|e| e.into_inner());
-        let mut out: Vec<Option<Answer>> = ps.iter().map(|p| known.memo.get(&key(p)).copied()).collect();
+        let mut out: Vec<Option<Answer>> = ps.iter().map(|p| known.memo.get(&memo_key(p, planar)).copied()).collect();
         let fresh: Vec<usize> = (0..ps.len()).filter(|&i| out[i].is_none()).collect();
         if !fresh.is_empty() {
             if let Err(e) = self.model.with(|s| self.solve_all(s, &mut known, ps, planar, &mut out)) {
@@ -428,11 +448,7 @@ impl CadShape {
             }
             for &i in &fresh {
                 if let Some(r) = out[i] {
-                    if known.memo.len() >= MEMO_SIZE {
-                        known.memo.clear();
-                        known.seeds.clear();
-                    }
-                    known.memo.insert(key(&ps[i]), r);
+                    known.remember(memo_key(&ps[i], planar), r);
                 }
             }
         }
@@ -459,7 +475,7 @@ impl CadShape {
         // its derivative
         let inside = |uv: [f64; 2]| {
             (0..k).all(|l| {
-                let (lo, hi) = (range[0][l].min(range[1][l]), range[0][l].max(range[1][l]));
+                let (lo, hi) = bounds(range, l);
                 let margin = 1e-6 * (hi - lo);
                 uv[l] > lo + margin && uv[l] < hi - margin
             })
@@ -483,21 +499,15 @@ impl CadShape {
         for (j, &i) in at.iter().enumerate() {
             let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
             let dd = &dds[3 * seconds * j..3 * seconds * (j + 1)];
-            let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
-            let r = sub(answers[i].0, ps[i]);
             let w = dirs[i];
-            out[i] = if k == 1 {
-                let h = dot(d[0], d[0]) + dot(second(0), r);
-                (h > 0.0).then(|| d[0].map(|c| c * dot(d[0], w) / h))
-            } else {
-                let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
-                let det = huu * hvv - huv * huv;
-                (huu > 0.0 && det > 0.0).then(|| {
-                    let (gu, gv) = (dot(d[0], w), dot(d[1], w));
-                    let (a, b) = ((hvv * gu - huv * gv) / det, (huu * gv - huv * gu) / det);
-                    std::array::from_fn(|c| a * d[0][c] + b * d[1][c])
-                })
-            };
+            out[i] = hessian(d, dd, sub(answers[i].0, ps[i]), k).map(|[huu, hvv, huv, det]| {
+                if k == 1 {
+                    return d[0].map(|c| c * dot(d[0], w) / huu);
+                }
+                let (gu, gv) = (dot(d[0], w), dot(d[1], w));
+                let (a, b) = ((hvv * gu - huv * gv) / det, (huu * gv - huv * gu) / det);
+                std::array::from_fn(|c| a * d[0][c] + b * d[1][c])
+            });
         }
         out
     }
@@ -507,10 +517,7 @@ impl CadShape {
     /// [`Self::solve`] does (it leaves one), then Newton's method on all
     /// the seeded ones at once; Gmsh's projection where that fails.
     fn solve_all(&self, s: &gmsh::Session, known: &mut Known, ps: &[[f64; 3]], planar: bool, out: &mut [Option<Answer>]) -> Result<(), CadError> {
-        let frame = match known.frame {
-            Some(f) => f,
-            None => *known.frame.insert(self.frame(s)?),
-        };
+        let frame = known.frame_of(self, s)?;
         let cell_of = |p: &[f64; 3]| p.map(|c| (c / frame.cell).floor() as i64);
         let mut seeded: Vec<(usize, [f64; 2])> = Vec::new();
         // a point with no seed around it starts from the nearest point of
@@ -581,7 +588,7 @@ impl CadShape {
                 let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
                 let dd = &dds[3 * seconds * j..3 * seconds * (j + 1)];
                 let Some(step) = newton_step(d, dd, sub(x[i], ps[i]), k) else { continue };
-                let next: [f64; 2] = std::array::from_fn(|l| if l < k { (uv[i][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 });
+                let next = step_in_range(uv[i], step, range, k);
                 // across the range's side: Gmsh's projection finds the foot
                 if (0..k).any(|l| next[l] != uv[i][l] + step[l]) {
                     continue;
@@ -643,7 +650,7 @@ impl CadShape {
                 let d = tangents(&ds[3 * k * j..3 * k * (j + 1)], k);
                 let r = sub([v[3 * j], v[3 * j + 1], v[3 * j + 2]], ps[j]);
                 match newton_step(d, &dds[3 * seconds * j..3 * seconds * (j + 1)], r, k) {
-                    Some(step) => on_seam(std::array::from_fn(|l| if l < k { (uv[j][l] + step[l]).clamp(range[0][l].min(range[1][l]), range[0][l].max(range[1][l])) } else { 0.0 }), frame, k),
+                    Some(step) => on_seam(step_in_range(uv[j], step, range, k), frame, k),
                     // (a pole, the medial axis) the converged foot stands
                     None => converged[j].1,
                 }
@@ -681,10 +688,7 @@ impl CadShape {
     /// of a query in `p`'s seed cell, else from Gmsh's projection (70 µs
     /// on a B-spline face against a few µs for Newton's evaluations).
     fn solve(&self, s: &gmsh::Session, known: &mut Known, p: [f64; 3], planar: bool) -> Result<Answer, CadError> {
-        let frame = match known.frame {
-            Some(f) => f,
-            None => *known.frame.insert(self.frame(s)?),
-        };
+        let frame = known.frame_of(self, s)?;
         let cell = p.map(|c| (c / frame.cell).floor() as i64);
         // the seed of p's own cell, else of the nearest cell around it
         // holding one (a point just across a cell's side from earlier
@@ -801,7 +805,7 @@ impl CadShape {
             let d = tangents(&s.derivative(self.dim, self.tag, &uv[..k])?, k);
             let dd = s.second_derivative(self.dim, self.tag, &uv[..k])?;
             let Some(step) = newton_step(d, &dd, sub([x[0], x[1], x[2]], p), k) else { return Ok(None) };
-            let next: [f64; 2] = std::array::from_fn(|j| if j < k { (uv[j] + step[j]).clamp(range[0][j].min(range[1][j]), range[0][j].max(range[1][j])) } else { 0.0 });
+            let next = step_in_range(uv, step, range, k);
             if !edge && (0..k).any(|j| next[j] != uv[j] + step[j]) {
                 return Ok(None);
             }
@@ -835,22 +839,49 @@ impl CadShape {
 /// and the offset `r` = S − p; None where the Hessian is not positive
 /// (NaN included): a point near the medial axis.
 fn newton_step(d: [[f64; 3]; 2], dd: &[f64], r: [f64; 3], k: usize) -> Option<[f64; 2]> {
+    let [huu, hvv, huv, det] = hessian(d, dd, r, k)?;
+    if k == 1 {
+        return Some([-dot(d[0], r) / huu, 0.0]);
+    }
+    let (gu, gv) = (dot(d[0], r), dot(d[1], r));
+    Some([-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det])
+}
+
+/// Newton's Hessian of |S − p|² / 2 in the parameters (as
+/// [`newton_step`]'s arguments): [h, 0, 0, h] on a curve, [huu, hvv, huv,
+/// det] on a surface; None where it is not positive (NaN included).
+fn hessian(d: [[f64; 3]; 2], dd: &[f64], r: [f64; 3], k: usize) -> Option<[f64; 4]> {
     let second = |l: usize| [dd[3 * l], dd[3 * l + 1], dd[3 * l + 2]];
     if k == 1 {
         let h = dot(d[0], d[0]) + dot(second(0), r);
-        return (h > 0.0).then(|| [-dot(d[0], r) / h, 0.0]);
+        return (h > 0.0).then_some([h, 0.0, 0.0, h]);
     }
     let (huu, hvv, huv) = (dot(d[0], d[0]) + dot(second(0), r), dot(d[1], d[1]) + dot(second(1), r), dot(d[0], d[1]) + dot(second(2), r));
     let det = huu * hvv - huv * huv;
-    let (gu, gv) = (dot(d[0], r), dot(d[1], r));
-    (huu > 0.0 && det > 0.0).then(|| [-(hvv * gu - huv * gv) / det, -(huu * gv - huv * gu) / det])
+    (huu > 0.0 && det > 0.0).then_some([huu, hvv, huv, det])
+}
+
+/// The low and high ends of parameter `l`'s range.
+fn bounds(range: [[f64; 2]; 2], l: usize) -> (f64, f64) {
+    (range[0][l].min(range[1][l]), range[0][l].max(range[1][l]))
+}
+
+/// `uv + step` kept in the range (parameters past the `k`-th are 0).
+fn step_in_range(uv: [f64; 2], step: [f64; 2], range: [[f64; 2]; 2], k: usize) -> [f64; 2] {
+    std::array::from_fn(|l| {
+        if l >= k {
+            return 0.0;
+        }
+        let (lo, hi) = bounds(range, l);
+        (uv[l] + step[l]).clamp(lo, hi)
+    })
 }
 
 /// `uv` on the grid of 2⁻³⁰ of the parameter range (a power of two, so
 /// the grid's points are exact), kept in the range ([`CadShape::settle`]).
 fn on_grid(uv: [f64; 2], range: [[f64; 2]; 2], k: usize) -> [f64; 2] {
     std::array::from_fn(|l| {
-        let (lo, hi) = (range[0][l].min(range[1][l]), range[0][l].max(range[1][l]));
+        let (lo, hi) = bounds(range, l);
         let h = (hi - lo) * (-30f64).exp2();
         if l >= k || h.is_nan() || h <= 0.0 || h.is_infinite() {
             return uv[l];
@@ -865,7 +896,7 @@ fn on_grid(uv: [f64; 2], range: [[f64; 2]; 2], k: usize) -> [f64; 2] {
 /// the two ends' points differ in round-off, enough to turn a fit.
 fn on_seam(uv: [f64; 2], frame: &Frame, k: usize) -> [f64; 2] {
     std::array::from_fn(|l| {
-        let (lo, hi) = (frame.range[0][l].min(frame.range[1][l]), frame.range[0][l].max(frame.range[1][l]));
+        let (lo, hi) = bounds(frame.range, l);
         let near = 1e-14 * (hi - lo);
         if l < k && frame.closed[l] && (uv[l] - lo <= near || hi - uv[l] <= near) {
             lo
