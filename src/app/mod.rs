@@ -10,5 +10,6 @@ pub mod bench;
 pub mod bind;
 pub mod cad;
 pub mod case;
+pub mod cli;
 pub mod driver;
 pub mod memory;
