@@ -392,6 +392,26 @@ pub fn parse_curve(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) 
     }
 }
 
+/// The options of `deformesh.gmsh.curve` (the Python package), as
+/// command-line flags without the program's name: the method's, and
+/// `--geometry FILE` (groups set to slip, fixed or another shape).
+#[derive(Parser)]
+#[command(name = "deformesh.gmsh.curve", no_binary_name = true)]
+struct LiveCli {
+    /// The geometry file.
+    #[arg(long)]
+    geometry: Option<PathBuf>,
+    #[command(flatten)]
+    method: MethodArgs,
+}
+
+/// The method's options and the geometry file of `args` ([`LiveCli`]),
+/// checked: each error names its flag.
+pub fn live_options(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> Result<(crate::highorder::curve::CurveOptions, Option<PathBuf>)> {
+    let a = LiveCli::try_parse_from(args).map_err(|e| Usage(e.to_string()))?;
+    Ok((method_options(&a.method)?, a.geometry))
+}
+
 /// An error of a `curve` job as the command line says it: prefixed by
 /// the input mesh, or the CAD model for the model's errors.
 pub fn curve_error(e: RunError, job: &CurveJob) -> anyhow::Error {
@@ -505,7 +525,7 @@ impl Bar {
 }
 
 /// A case name made safe as one folder name under `out/`.
-fn folder_name(name: &str) -> String {
+pub fn folder_name(name: &str) -> String {
     let safe: String = name.chars().map(|c| if c.is_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
     if safe.trim_matches('.').is_empty() { "case".into() } else { safe }
 }

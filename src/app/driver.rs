@@ -64,6 +64,10 @@ pub enum RunError {
         /// Their element tags in the input file.
         tags: Vec<u64>,
     },
+    /// [`request_stop`] was called (the Python package's Ctrl-C): the run
+    /// ended before writing anything.
+    #[error("interrupted: nothing was written or changed")]
+    Interrupted,
     /// A picture failed.
     #[error("drawing the picture failed")]
     Render(#[from] RenderError),
@@ -186,6 +190,7 @@ impl RunError {
             | RunError::Unrepaired { .. } => exit::SOLVER,
             RunError::Cad(crate::geometry::cad::CadError::Absent { .. } | crate::geometry::cad::CadError::Library { .. }) => exit::UNAVAILABLE,
             RunError::Memory { .. } => exit::MEMORY,
+            RunError::Interrupted => exit::SIGNAL_BASE + 2,
             RunError::Folder(FolderError::NotWritten { .. }) => exit::NOT_OURS,
             RunError::Folder(FolderError::IsInput { .. }) => exit::USAGE,
             RunError::Folder(f) if f.is_write_failure() => exit::WRITE,
@@ -730,6 +735,34 @@ fn frame_bounds<'a, const D: usize>(sets: impl Iterator<Item = &'a [[f64; D]]>) 
     (lo, hi)
 }
 
+/// Where `curve` puts the curved mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sink {
+    /// The job's files (the mesh, its VTU, PNG and report), whole or not
+    /// at all.
+    Files,
+    /// Nowhere: the curved layout is returned in
+    /// [`CurveReport::curved`] (the Python package's live Gmsh model).
+    Memory,
+}
+
+/// Set by [`request_stop`]; read where a run may end without harm.
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Asks the runs of this process to stop (`true`) before they write
+/// anything, or clears the request (`false`): the Python package's
+/// Ctrl-C, which must leave files and models as they were. The command
+/// line's Ctrl-C is a signal handler of its own
+/// ([`crate::io::folder::install_interrupt_handler`]).
+pub fn request_stop(stop: bool) {
+    STOP.store(stop, std::sync::atomic::Ordering::SeqCst);
+}
+
+/// Whether [`request_stop`] asked the runs to stop.
+pub fn stop_requested() -> bool {
+    STOP.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 /// What `deformesh curve` is asked to do.
 #[derive(Clone, Debug)]
 pub struct CurveJob {
@@ -805,6 +838,9 @@ pub struct CadReport {
     /// Per entity of the mesh, the model's entities it was bound to.
     pub bound: Vec<crate::app::cad::Bound>,
 }
+
+/// A `curve` job, the input's layout, and where the result goes.
+type JobIn<'a> = (&'a CurveJob, &'a crate::io::layout::Layout, Sink);
 
 /// How `curve` binds a mesh's boundary: a geometry file, a CAD model, or
 /// both (the file then overrides groups).
@@ -931,25 +967,20 @@ pub struct CurveReport {
     /// folder still as an earlier run wrote them): a rerun replaces or
     /// removes only those ([`crate::io::folder`]).
     pub outputs: Vec<String>,
+    /// The curved mesh, with the input's groups, entities and tags, where
+    /// the run wrote no files ([`Sink::Memory`]).
+    #[serde(skip)]
+    pub curved: Option<crate::io::layout::Layout>,
 }
 
 /// `deformesh curve`: reads a linear mesh and a geometry file, runs
 /// Algorithms 2 and 3, and writes the curved mesh (MSH, VTU, PNG, report)
 /// only if every element is certified valid.
-pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
+pub fn curve_file(job: &CurveJob, progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     check_output_file(&job.output)?;
     let (dir, _, report, claim) = job.destination();
     check_set(&dir, &job.output_names(), &report, &claim)?;
     let bytes = std::fs::read(&job.input).map_err(|cause| RunError::Read { path: job.input.clone(), cause })?;
-    let read = crate::io::msh::parse_any(&bytes, true)?;
-    drop(bytes);
-    unkept(&read.layout).map_err(|why| RunError::Unkept { path: job.input.clone(), why })?;
-    check_memory(&read.mesh, job)?;
-    let geometry = job.geometry.as_deref().map(crate::app::bind::GeometryFile::read).transpose()?;
-    let gfile = job.geometry.as_ref().map_or(String::new(), |g| g.display().to_string());
-    if geometry.is_none() && job.cad.is_none() {
-        return Err(CaseError { file: job.input.display().to_string(), message: "nothing binds the mesh's boundary: give a geometry file or a CAD model (--cad)".into() }.into());
-    }
     let model = match &job.cad {
         Some(c) => {
             std::fs::metadata(&c.model).map_err(|cause| RunError::Read { path: c.model.clone(), cause })?;
@@ -957,13 +988,30 @@ pub fn curve_file(job: &CurveJob, mut progress: impl FnMut(Progress)) -> Result<
         }
         None => None,
     };
-    let binding = Binding { geometry: geometry.as_ref(), gfile: &gfile, model: model.as_ref() };
+    curve_bytes(job, bytes, model.as_ref(), Sink::Files, progress)
+}
+
+/// [`curve_file`] on the MSH file `bytes` (read from, or standing for,
+/// `job.input`), bound to `model` (the job's `cad` is not read again)
+/// and the job's geometry file; with [`Sink::Memory`] nothing is written
+/// and the curved mesh is in the report's `curved`.
+pub fn curve_bytes(job: &CurveJob, bytes: Vec<u8>, model: Option<&std::sync::Arc<crate::geometry::cad::CadModel>>, sink: Sink, mut progress: impl FnMut(Progress)) -> Result<CurveReport, RunError> {
+    let read = crate::io::msh::parse_any(&bytes, true)?;
+    drop(bytes);
+    unkept(&read.layout).map_err(|why| RunError::Unkept { path: job.input.clone(), why })?;
+    check_memory(&read.mesh, job)?;
+    let geometry = job.geometry.as_deref().map(crate::app::bind::GeometryFile::read).transpose()?;
+    let gfile = job.geometry.as_ref().map_or(String::new(), |g| g.display().to_string());
+    if geometry.is_none() && model.is_none() {
+        return Err(CaseError { file: job.input.display().to_string(), message: "nothing binds the mesh's boundary: give a geometry file or a CAD model (--cad)".into() }.into());
+    }
+    let binding = Binding { geometry: geometry.as_ref(), gfile: &gfile, model };
     // either may relax the check that curved groups lie on their shapes
     let mut job = job.clone();
     job.options.shape_tolerance = job.options.shape_tolerance.max(geometry.as_ref().and_then(|g| g.shape_tolerance).unwrap_or(0.0));
     let fine_cells = |d: u32| job.options.order.max(1).pow(d);
     let tags = &read.cell_tags;
-    let input = (&job, &read.layout);
+    let input = (&job, &read.layout, sink);
     // a mesh of one kind goes to Algorithm 1's kernels compiled for it;
     // several kinds (and prisms, pyramids) through their simplices, where
     // curve_mixed names tangled cells by their coarse cell
@@ -1032,7 +1080,7 @@ fn check_memory(mesh: &AnyMesh, job: &CurveJob) -> Result<(), RunError> {
 }
 
 /// `curve` on a solid mesh of hexes or tetrahedra.
-fn curve_solid<const N: usize, const K: usize>(mesh: SolidMesh<N, K>, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError>
+fn curve_solid<const N: usize, const K: usize>(mesh: SolidMesh<N, K>, binding: &Binding, job: JobIn, progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError>
 where
     SolidMesh<N, K>: Outputs<3, N> + Subdividable<3, N>,
 {
@@ -1054,7 +1102,7 @@ where
 
 /// `curve` on a linear solid of prisms, pyramids, hexes and tetrahedra,
 /// several kinds or prisms or pyramids alone.
-fn curve_mixed_solid(mut mesh: CurvedMesh<3>, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
+fn curve_mixed_solid(mut mesh: CurvedMesh<3>, binding: &Binding, job: JobIn, progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     let gfile = binding.gfile;
     let facets = mesh.linear_facets();
     if let Some(model) = binding.model {
@@ -1216,7 +1264,7 @@ impl PlaneInput for CurvedMesh<2> {
 }
 
 /// `curve` on a plane mesh of quads, triangles or both.
-fn curve_plane(mut mesh: impl PlaneInput, binding: &Binding, job: (&CurveJob, &crate::io::layout::Layout), progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
+fn curve_plane(mut mesh: impl PlaneInput, binding: &Binding, job: JobIn, progress: &mut impl FnMut(Progress)) -> Result<CurveReport, RunError> {
     // Gmsh may write a surface's cells clockwise (by its normal)
     let turned = mesh.orient();
     let gfile = binding.gfile;
@@ -1407,7 +1455,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     parts: &[BoundaryPart<D>],
     (unbound, shared): (Vec<String>, &[(usize, usize)]),
     reoriented: usize,
-    (job, input): (&CurveJob, &crate::io::layout::Layout),
+    (job, input, sink): JobIn,
     (progress, cad): (&mut dyn FnMut(Progress), Option<(&std::sync::Arc<crate::geometry::cad::CadModel>, Vec<crate::app::cad::Bound>)>),
 ) -> Result<CurveReport, RunError> {
     let (model, bound) = cad.map_or((None, Vec::new()), |(m, b)| (Some(m), b));
@@ -1433,6 +1481,36 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     }
     if !c.quality.invalid_elements.is_empty() {
         return Err(RunError::InvalidCurved { order: job.options.order, cells: c.quality.invalid_elements.clone(), min_det: c.quality.min_det_j });
+    }
+    if stop_requested() {
+        return Err(RunError::Interrupted);
+    }
+    let mut report = CurveReport {
+        input: job.input.display().to_string(),
+        dimension: D,
+        cells: c.mesh.cells.len(),
+        unbound_groups: unbound,
+        cad: model.map(|m| CadReport { model: m.file.display().to_string(), library: m.library.display().to_string(), gmsh_version: m.version.clone(), scale: m.scale, bound }),
+        reoriented_cells: reoriented,
+        quality: c.quality.clone(),
+        periodic_snap: snapped,
+        spacing,
+        steps: c.stats.steps,
+        halved_steps: c.stats.halved,
+        algorithm2_runs: c.attempts,
+        solver: c.solver.clone(),
+        algorithm2_s: c.seconds.0,
+        certify_s: c.seconds.1,
+        total_s: 0.0,
+        peak_memory_mib: None,
+        outputs: Vec::new(),
+        curved: None,
+    };
+    if sink == Sink::Memory {
+        report.total_s = clock.elapsed().as_secs_f64();
+        report.peak_memory_mib = super::bench::peak_memory_mib();
+        report.curved = Some(layout);
+        return Ok(report);
     }
     let (dir, stem, report_name, claim) = job.destination();
     let min_det: Vec<f64> = c.certificates.iter().map(|x| x.min_det_lower).collect();
@@ -1467,26 +1545,7 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
         files.push((format!("{stem}.vtu"), vtu.into_bytes()));
     }
     files.push((format!("{stem}.png"), png?));
-    let mut report = CurveReport {
-        input: job.input.display().to_string(),
-        dimension: D,
-        cells: c.mesh.cells.len(),
-        unbound_groups: unbound,
-        cad: model.map(|m| CadReport { model: m.file.display().to_string(), library: m.library.display().to_string(), gmsh_version: m.version.clone(), scale: m.scale, bound }),
-        reoriented_cells: reoriented,
-        quality: c.quality.clone(),
-        periodic_snap: snapped,
-        spacing,
-        steps: c.stats.steps,
-        halved_steps: c.stats.halved,
-        algorithm2_runs: c.attempts,
-        solver: c.solver.clone(),
-        algorithm2_s: c.seconds.0,
-        certify_s: c.seconds.1,
-        total_s: 0.0,
-        peak_memory_mib: None,
-        outputs: files.iter().map(|f| f.0.clone()).chain(std::iter::once(report_name.clone())).collect(),
-    };
+    report.outputs = files.iter().map(|f| f.0.clone()).chain(std::iter::once(report_name.clone())).collect();
     report.total_s = clock.elapsed().as_secs_f64();
     report.peak_memory_mib = super::bench::peak_memory_mib();
     write_set(&dir, &files, &report_name, serde_json::to_value(&report).expect("report serialises"), &claim)?;

@@ -82,6 +82,24 @@ pub fn session(library: Option<&Path>) -> Result<MutexGuard<'static, Option<Sess
     Ok(guard)
 }
 
+/// The process's Gmsh session on the library at `library` that the
+/// process has already loaded and initialised (the Python `gmsh` module's
+/// `gmsh.libpath`): loading it again gives the same library and so the
+/// same current model; Gmsh is not initialised again and no option is
+/// changed. A session already loaded is kept (it is that library or the
+/// process has two Gmsh, which it cannot use both of).
+pub fn attach(library: &Path) -> Result<MutexGuard<'static, Option<Session>>, CadError> {
+    let mut guard = SESSION.lock().unwrap_or_else(|e| e.into_inner());
+    if guard.is_none() {
+        // SAFETY: the library is loaded already; this only counts a reference
+        let lib = unsafe { libloading::Library::new(library) }.map_err(|e| CadError::Absent { named: true, tried: vec![format!("{}: {e}", library.display())] })?;
+        *guard = Some(Session::start(lib, library.to_path_buf(), false)?);
+    }
+    // the user may have made another model current since the last call
+    guard.as_mut().expect("set above").current = None;
+    Ok(guard)
+}
+
 /// Where to look for the library, in order, and the names tried.
 fn candidates(library: Option<&Path>) -> Result<Vec<PathBuf>, CadError> {
     let names = ["libgmsh.so.4.15", "libgmsh.so", "libgmsh.so.4.14", "libgmsh.so.4.13", "libgmsh.so.4.12", "libgmsh.so.4.11", "libgmsh.dylib", "gmsh.dll"];
@@ -117,7 +135,7 @@ fn python_libpath() -> Option<PathBuf> {
 }
 
 /// A function pointer of type `T` named `name` in `lib`.
-unsafe fn symbol<T: Copy>(lib: &libloading::Library, path: &Path, name: &str) -> Result<T, CadError> {
+pub(super) unsafe fn symbol<T: Copy>(lib: &libloading::Library, path: &Path, name: &str) -> Result<T, CadError> {
     let c = CString::new(name).expect("no NUL in a symbol name");
     unsafe { lib.get::<T>(c.as_bytes_with_nul()) }.map(|s| *s).map_err(|e| CadError::Library {
         why: format!("`{}` has no `{name}` ({e}): it is not Gmsh's library, or a Gmsh older than {}.{}", path.display(), OLDEST.0, OLDEST.1),
@@ -172,7 +190,7 @@ impl Session {
         for path in &tried {
             // SAFETY: loading Gmsh runs its static initialisers only
             match unsafe { libloading::Library::new(path) } {
-                Ok(lib) => return Session::start(lib, path.clone()),
+                Ok(lib) => return Session::start(lib, path.clone(), true),
                 // a bare name is the loader's search: said once below
                 Err(e) if path.components().count() > 1 || named => why.push(format!("{}: {e}", path.display())),
                 Err(_) => {}
@@ -187,7 +205,7 @@ impl Session {
         Err(CadError::Absent { named, tried: why })
     }
 
-    fn start(lib: libloading::Library, path: PathBuf) -> Result<Session, CadError> {
+    fn start(lib: libloading::Library, path: PathBuf, initialize: bool) -> Result<Session, CadError> {
         // SAFETY: the types are those of gmshc.h (4.11 and later)
         let api = unsafe {
             Api {
@@ -214,12 +232,14 @@ impl Session {
             }
         };
         let mut s = Session { api, _lib: lib, path, version: String::new(), current: None, models: 0 };
-        let mut ierr = 0;
-        // no configuration files, no GUI or batch run
-        unsafe { (s.api.initialize)(0, std::ptr::null_mut(), 0, 0, &mut ierr) };
-        s.check(ierr, "gmshInitialize")?;
-        // quiet: errors come back through ierr and the logger
-        s.set_option("General.Terminal", 0.0)?;
+        if initialize {
+            let mut ierr = 0;
+            // no configuration files, no GUI or batch run
+            unsafe { (s.api.initialize)(0, std::ptr::null_mut(), 0, 0, &mut ierr) };
+            s.check(ierr, "gmshInitialize")?;
+            // quiet: errors come back through ierr and the logger
+            s.set_option("General.Terminal", 0.0)?;
+        }
         s.version = s.option_string("General.Version")?;
         let v: Vec<u32> = s.version.split('.').filter_map(|x| x.parse().ok()).collect();
         if v.len() < 2 || (v[0], v[1]) < OLDEST {
@@ -228,8 +248,13 @@ impl Session {
         Ok(s)
     }
 
+    /// The loaded library, for the calls of the live model ([`super::live`]).
+    pub(super) fn library(&self) -> &libloading::Library {
+        &self._lib
+    }
+
     /// Ok, or Gmsh's last error for a call that set `ierr`.
-    fn check(&self, ierr: c_int, call: &str) -> Result<(), CadError> {
+    pub(super) fn check(&self, ierr: c_int, call: &str) -> Result<(), CadError> {
         if ierr == 0 {
             return Ok(());
         }
@@ -240,14 +265,14 @@ impl Session {
         Err(CadError::Gmsh { call: call.to_string(), message: text })
     }
 
-    fn take_string(&self, p: *mut c_char) -> String {
+    pub(super) fn take_string(&self, p: *mut c_char) -> String {
         let s = unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
         unsafe { (self.api.free)(p.cast()) };
         s
     }
 
     /// Copies Gmsh's array and frees it.
-    fn take<T: Copy>(&self, p: *mut T, n: usize) -> Vec<T> {
+    pub(super) fn take<T: Copy>(&self, p: *mut T, n: usize) -> Vec<T> {
         if p.is_null() {
             return Vec::new();
         }
@@ -256,7 +281,7 @@ impl Session {
         v
     }
 
-    fn set_option(&mut self, name: &str, value: f64) -> Result<(), CadError> {
+    pub(super) fn set_option(&mut self, name: &str, value: f64) -> Result<(), CadError> {
         let c = CString::new(name).expect("option names have no NUL");
         let mut ierr = 0;
         unsafe { (self.api.option_set_number)(c.as_ptr(), value, &mut ierr) };

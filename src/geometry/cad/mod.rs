@@ -30,6 +30,7 @@
 
 pub mod classify;
 mod gmsh;
+pub mod live;
 
 use super::ClosestPoint;
 use crate::numeric::{cross3, dot, norm, sub, unit};
@@ -150,6 +151,9 @@ pub struct CadModel {
     /// The factor its coordinates were multiplied by on reading.
     pub scale: f64,
     failure: Mutex<Option<CadError>>,
+    /// The current model of a Gmsh the process had initialised ([`live`]):
+    /// never switched, whatever its name.
+    live: bool,
 }
 
 impl CadModel {
@@ -181,14 +185,16 @@ impl CadModel {
         let link = (written != ext && !ext.starts_with("geo")).then(|| LowerCaseLink::new(file, &ext)).transpose()?;
         let name = s.open(link.as_ref().map_or(file, |l| l.path.as_path()), scale)?;
         drop(link);
-        Ok(Arc::new(CadModel { name, file: file.to_path_buf(), library: s.path.clone(), version: s.version.clone(), scale, failure: Mutex::new(None) }))
+        Ok(Arc::new(CadModel { name, file: file.to_path_buf(), library: s.path.clone(), version: s.version.clone(), scale, failure: Mutex::new(None), live: false }))
     }
 
     /// Runs `f` on the session with this model current.
     fn with<R>(&self, f: impl FnOnce(&gmsh::Session) -> Result<R, CadError>) -> Result<R, CadError> {
         let mut guard = gmsh::session(None)?;
         let s = guard.as_mut().expect("session loaded");
-        s.select(&self.name)?;
+        if !self.live {
+            s.select(&self.name)?;
+        }
         f(s)
     }
 

@@ -35,7 +35,7 @@ use read::Accept;
 
 pub use crate::io::layout::DOMAIN_NAME;
 
-pub use types::MSH_TYPES;
+pub use types::{gmsh_perm, shape_of, MSH_TYPES};
 /// MSH element types of lines of order 1..=4 (index `p − 1`).
 pub const MSH_LINE_TYPES: [i64; 4] = MSH_TYPES[0].1;
 /// MSH element types of quads of order 1..=4: QUA_4, QUA_9, QUA_16, QUA_25.

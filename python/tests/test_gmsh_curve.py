@@ -1,0 +1,81 @@
+"""`deformesh.gmsh.curve`: the live Gmsh model's mesh curved in place."""
+
+from __future__ import annotations
+
+import _thread
+import threading
+
+import gmsh
+import numpy as np
+import pytest
+
+import deformesh
+from conftest import check_curved, fillet_part, groups, prism_layer, quad_layer, snapshot
+
+
+def curve_and_check(order, tmp_path, **options):
+    before = groups()
+    linear = gmsh.model.mesh.getElements(gmsh.model.getDimension())[1]
+    report = deformesh.gmsh.curve(order=order, progress=False, **options)
+    # every cell of the model was curved and written back
+    after = gmsh.model.mesh.getElements(gmsh.model.getDimension())[1]
+    assert sum(len(e) for e in after) == sum(len(e) for e in linear) == report["cells"]
+    return report, check_curved(order, report, before, tmp_path)
+
+
+def test_a_filleted_part_with_a_hole_is_curved_in_place_at_order_3(session, tmp_path):
+    fillet_part()
+    report, figures = curve_and_check(3, tmp_path)
+    assert report["written_back"]["elements"] > 1000
+    # the fillet's and the hole's nodes are off the straight faces: curved
+    assert report["quality"]["boundary_node_distance"] < 1e-12
+
+
+def test_a_quad_boundary_layer_is_curved_in_place(session, tmp_path):
+    quad_layer()
+    types = gmsh.model.mesh.getElementTypes(2)
+    assert 3 in types, "the layer has quads"
+    curve_and_check(3, tmp_path)
+    assert 36 in gmsh.model.mesh.getElementTypes(2), "QUA_16"
+
+
+def test_a_prism_layer_is_curved_in_place(session, tmp_path):
+    prism_layer()
+    assert gmsh.model.mesh.getElementTypes(3) == [6]
+    curve_and_check(2, tmp_path)
+    assert list(gmsh.model.mesh.getElementTypes(3)) == [13], "PRI_18"
+
+
+def test_ctrl_c_leaves_the_model_as_it_was(session):
+    fillet_part(0.12)
+    nodes, xyz, elements = snapshot()
+    timer = threading.Timer(0.2, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        deformesh.gmsh.curve(order=3, progress=False)
+    timer.cancel()
+    n2, x2, e2 = snapshot()
+    assert np.array_equal(nodes, n2) and np.array_equal(xyz, x2)
+    for (t1, k1, v1), (t2, k2, v2) in zip(elements, e2):
+        assert t1 == t2 and all(np.array_equal(a, b) for a, b in zip(k1, k2)) and all(np.array_equal(a, b) for a, b in zip(v1, v2))
+    # and the next run, uninterrupted, curves it
+    report = deformesh.gmsh.curve(order=2, progress=False)
+    assert report["quality"]["invalid_elements"] == []
+
+
+def test_a_mesh_of_order_2_is_refused_and_left_as_it_was(session):
+    fillet_part(0.4)
+    gmsh.model.mesh.setOrder(2)
+    nodes, xyz, _ = snapshot()
+    with pytest.raises(deformesh.InputError, match="linear mesh"):
+        deformesh.gmsh.curve(order=3, progress=False)
+    n2, x2, _ = snapshot()
+    assert np.array_equal(nodes, n2) and np.array_equal(xyz, x2)
+
+
+def test_a_wrong_option_is_a_usage_error_naming_it(session):
+    fillet_part(0.4)
+    with pytest.raises(deformesh.UsageError, match="--order"):
+        deformesh.gmsh.curve(order=7, progress=False)
+    with pytest.raises(TypeError, match="unknown option"):
+        deformesh.gmsh.curve(order=2, smoothness=3)
