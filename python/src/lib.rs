@@ -90,7 +90,11 @@ fn detached<T: Send + 'static>(py: Python<'_>, progress: Option<Py<PyAny>>, work
         Ok(r) => r,
         Err(payload) if payload.is::<Stopped>() => Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("")),
         Err(payload) => {
-            let what = payload.downcast_ref::<String>().cloned().or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
+            let what = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
             Err(PyRuntimeError::new_err(format!("deformesh panicked (a bug: please report it with the input): {what}")))
         }
     }
@@ -138,7 +142,9 @@ fn curve_live(py: Python<'_>, library: PathBuf, argv: Vec<String>, cad: bool, pr
     let (report, curved, p) = detached(py, progress, move |report| {
         let (options, geometry) = deformesh::app::cli::live_options(argv).map_err(|e| failure(deformesh::app::cli::exit_code(&e), &e))?;
         let to_err = |e: deformesh::geometry::cad::CadError| run_error(e.into(), None);
+        let clock = std::time::Instant::now();
         let (name, text) = live::live_msh(&lib).map_err(to_err)?;
+        tracing::info!("the live model's mesh read: {:.3}s", clock.elapsed().as_secs_f64());
         let model = if cad { Some(CadModel::live(&lib).map_err(to_err)?) } else { None };
         let job = CurveJob {
             input: format!("the Gmsh model `{name}`").into(),
@@ -151,7 +157,9 @@ fn curve_live(py: Python<'_>, library: PathBuf, argv: Vec<String>, cad: bool, pr
             force: false,
         };
         let p = job.options.order;
+        let clock = std::time::Instant::now();
         let mut r = deformesh::app::driver::curve_bytes(&job, text.into_bytes(), model.as_ref(), Sink::Memory, report).map_err(|e| run_error(e, Some(&job)))?;
+        tracing::info!("curved: {:.3}s", clock.elapsed().as_secs_f64());
         if stop_requested() {
             std::panic::resume_unwind(Box::new(Stopped));
         }
@@ -159,7 +167,9 @@ fn curve_live(py: Python<'_>, library: PathBuf, argv: Vec<String>, cad: bool, pr
         Ok((serde_json::to_value(&r).expect("the report serialises"), curved, p))
     })?;
     // not interruptible: the model is written whole
+    let clock = std::time::Instant::now();
     let written = py.detach(|| live::write_back(&library, &curved, p)).map_err(|e| run_error(e.into(), None))?;
+    tracing::info!("written back: {:.3}s", clock.elapsed().as_secs_f64());
     let mut report = report;
     report["written_back"] = serde_json::to_value(&written).expect("serialises");
     Ok(report.to_string())

@@ -11,6 +11,7 @@ import pytest
 
 import deformesh
 from conftest import check_curved, fillet_part, groups, prism_layer, quad_layer, snapshot
+from models import periodic_channel
 
 
 def curve_and_check(order, tmp_path, **options):
@@ -44,6 +45,23 @@ def test_a_prism_layer_is_curved_in_place(session, tmp_path):
     assert gmsh.model.mesh.getElementTypes(3) == [6]
     curve_and_check(2, tmp_path)
     assert list(gmsh.model.mesh.getElementTypes(3)) == [13], "PRI_18"
+
+
+def test_a_periodic_channel_keeps_its_periodic_nodes_at_order_3(session, tmp_path):
+    periodic_channel()
+    right = [c for _, c in gmsh.model.getEntities(1) if abs(gmsh.model.occ.getCenterOfMass(1, c)[0] - 3) < 1e-9]
+    curve_and_check(3, tmp_path)
+    for c in right:
+        master, slaves, masters, _ = gmsh.model.mesh.getPeriodicNodes(1, c, includeHighOrderNodes=True)
+        # the inlet's edges have 2 new nodes each: the links hold them too
+        assert len(slaves) == 3 * (len(gmsh.model.mesh.getElements(1, c)[1][0])) + 1
+        xs = np.asarray([gmsh.model.mesh.getNode(n)[0] for n in slaves])
+        xm = np.asarray([gmsh.model.mesh.getNode(n)[0] for n in masters])
+        # every slave node is the image of a master node (Gmsh pairs the
+        # new nodes of an edge in reverse where the two edges run opposite
+        # ways, after its own setOrder too: measured, its links are its own)
+        image = np.sort((xs - [3, 0, 0])[:, 1])
+        assert np.abs(image - np.sort(xm[:, 1])).max() < 1e-12 and np.abs(xs[:, 0] - 3).max() < 1e-12
 
 
 def test_ctrl_c_leaves_the_model_as_it_was(session):

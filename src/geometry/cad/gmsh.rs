@@ -90,10 +90,19 @@ pub fn session(library: Option<&Path>) -> Result<MutexGuard<'static, Option<Sess
 /// process has two Gmsh, which it cannot use both of).
 pub fn attach(library: &Path) -> Result<MutexGuard<'static, Option<Session>>, CadError> {
     let mut guard = SESSION.lock().unwrap_or_else(|e| e.into_inner());
-    if guard.is_none() {
-        // SAFETY: the library is loaded already; this only counts a reference
-        let lib = unsafe { libloading::Library::new(library) }.map_err(|e| CadError::Absent { named: true, tried: vec![format!("{}: {e}", library.display())] })?;
-        *guard = Some(Session::start(lib, library.to_path_buf(), false)?);
+    match guard.as_ref() {
+        None => {
+            // SAFETY: the library is loaded already; this only counts a reference
+            let lib = unsafe { libloading::Library::new(library) }.map_err(|e| CadError::Absent { named: true, tried: vec![format!("{}: {e}", library.display())] })?;
+            *guard = Some(Session::start(lib, library.to_path_buf(), false)?);
+        }
+        // another Gmsh's current model is not the caller's
+        Some(s) if s.path.canonicalize().ok() != library.canonicalize().ok() => {
+            return Err(CadError::Library {
+                why: format!("this process has Gmsh's library `{}` open for deformesh already, and the caller's is `{}`: one process can use one Gmsh (unset DEFORMESH_GMSH_LIB)", s.path.display(), library.display()),
+            });
+        }
+        Some(_) => {}
     }
     // the user may have made another model current since the last call
     guard.as_mut().expect("set above").current = None;
