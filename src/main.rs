@@ -1,7 +1,8 @@
 //! The `deformesh` program: the command line of [`deformesh::app::cli`],
 //! with an allocator whose failure ends the run with a message and the
 //! Ctrl-C handler that removes staged outputs (a process's, not a
-//! library's: the Python package's command sets neither).
+//! library's: the Python package's `deformesh` command sets the handler
+//! too, but not the allocator).
 
 use deformesh::app::driver::exit;
 use std::alloc::{GlobalAlloc, Layout, System};

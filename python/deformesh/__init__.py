@@ -98,9 +98,11 @@ def _as_file(mesh, folder: str) -> Path:
 @contextlib.contextmanager
 def _gmsh_for(cad):
     """Gmsh's library for a CAD model (the `gmsh` module's, where it is
-    installed), and whether this process has initialised it: then the
-    model is read into the user's Gmsh, and the user's current model is
-    made current again and ours removed afterwards."""
+    installed) and whether to attach to it (always, when the module is
+    there: one Gmsh per process). The model is read into the Python
+    module's Gmsh, initialised for the call if it was not (and finalised
+    after); the user's current model is made current again and ours
+    removed afterwards."""
     if cad is None:
         yield None, False
         return
@@ -109,13 +111,18 @@ def _gmsh_for(cad):
     except ImportError:
         yield None, False
         return
-    attach = bool(gmsh.isInitialized())
-    current = gmsh.model.getCurrent() if attach else None
-    before = set(gmsh.model.list()) if attach else set()
+    ours = not gmsh.isInitialized()
+    if ours:
+        gmsh.initialize(interruptible=False)
+        gmsh.option.setNumber("General.Terminal", 0)
+    current = gmsh.model.getCurrent()
+    before = set(gmsh.model.list())
     try:
-        yield gmsh.libpath, attach
+        yield gmsh.libpath, True
     finally:
-        if attach:
+        if ours:
+            gmsh.finalize()
+        else:
             for name in set(gmsh.model.list()) - before:
                 gmsh.model.setCurrent(name)
                 gmsh.model.remove()
@@ -135,6 +142,9 @@ def curve(mesh, *, order: int = 3, cad=None, geometry=None, out=None, format=Non
     with tempfile.TemporaryDirectory(prefix="deformesh-") as tmp:
         path = _as_file(mesh, tmp)
         target = Path(out) if out is not None else Path(tmp) / "curved.msh"
+        if out is None and format is None:
+            # meshio 5.3 reads every MSH 2.2 file back; not every MSH 4.1
+            format = "msh22"
         argv = ["deformesh", "curve", os.fspath(path), "-o", os.fspath(target), *method_flags(order=order, **options)]
         if cad is not None:
             argv += ["--cad", os.fspath(cad)]

@@ -14,10 +14,12 @@ from .errors import from_failure
 def curve(order: int = 3, *, cad: bool = True, geometry=None, progress=True, **options) -> dict:
     """Curves the mesh of the current Gmsh model in place, order `order`.
 
-    Its elements become Lagrange elements of that order (Gmsh's own
-    `setOrder`, so its node numbering, classification, physical groups and
-    periodic links), every new node where the deformation method puts it,
-    and every element certified valid. The CAD is the model itself
+    Its elements become Lagrange elements of that order, every node where
+    the deformation method puts it and every element certified valid: the
+    new nodes are added on their entities (with their parameters there),
+    each element replaced by its curved one of the same tag; physical
+    groups and classification stay. A model with periodic links goes
+    through Gmsh's own `setOrder`, which links the new nodes. The CAD is the model itself
     (`cad=True`): each boundary element is curved onto the model entity it
     lies on. `geometry`: a geometry file (TOML) that sets groups to slip,
     fixed or another shape (with cad=False it binds the boundary alone).
@@ -26,8 +28,10 @@ def curve(order: int = 3, *, cad: bool = True, geometry=None, progress=True, **o
     solver, shape_tolerance, band, snap.
 
     Refuses, raising and changing nothing, when any element would be
-    invalid (InvalidMeshError) or the input is wrong (InputError, …);
-    Ctrl-C raises KeyboardInterrupt and leaves the model as it was.
+    invalid (InvalidMeshError) or the input is wrong (InputError, …).
+    Ctrl-C raises KeyboardInterrupt and leaves the model as it was, where
+    Gmsh was initialised with `interruptible=False` (its default makes
+    Ctrl-C end the process).
     Returns the report (the command line's report.json, and
     `written_back`: elements and nodes given to Gmsh).
     """

@@ -3,9 +3,9 @@
 //!
 //! Every long job runs on a thread of its own while the caller's thread,
 //! the GIL released between polls, hands the progress to Python and
-//! checks for Ctrl-C: then the job is asked to stop
-//! ([`deformesh::app::driver::request_stop`]), it ends at its next
-//! progress report or before it writes anything, and the caller gets
+//! checks for Ctrl-C: then the job's own stop request is set
+//! ([`deformesh::app::driver::stop_on`]), it ends at its next progress
+//! report or before it writes anything, and the caller gets
 //! `KeyboardInterrupt` with files and model as they were. (A signal
 //! handler of ours would replace Python's.)
 
@@ -14,7 +14,9 @@ use std::path::PathBuf;
 use std::sync::mpsc::{channel, RecvTimeoutError};
 use std::time::Duration;
 
-use deformesh::app::driver::{exit, request_stop, stop_requested, CurveJob, Progress, RunError, Sink};
+use deformesh::app::driver::{exit, stop_on, stop_requested, CurveJob, Progress, RunError, Sink};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use deformesh::geometry::cad::{live, CadModel};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyRuntimeError};
@@ -43,12 +45,14 @@ fn run_error(e: RunError, job: Option<&CurveJob>) -> PyErr {
 /// recursion is the command line's), handing each progress report to
 /// `progress(algorithm, t, steps, halved)` and ending it on Ctrl-C.
 fn detached<T: Send + 'static>(py: Python<'_>, progress: Option<Py<PyAny>>, work: impl FnOnce(&mut dyn FnMut(Progress)) -> Result<T, PyErr> + Send + 'static) -> PyResult<T> {
-    request_stop(false);
+    let stop = Arc::new(AtomicBool::new(false));
+    let token = stop.clone();
     let (tx, rx) = channel::<Progress>();
     let worker = std::thread::Builder::new()
         .name("deformesh".into())
         .stack_size(64 << 20)
         .spawn(move || {
+            stop_on(Some(token));
             let mut report = |p: Progress| {
                 if stop_requested() {
                     std::panic::resume_unwind(Box::new(Stopped));
@@ -58,10 +62,9 @@ fn detached<T: Send + 'static>(py: Python<'_>, progress: Option<Py<PyAny>>, work
             std::panic::catch_unwind(AssertUnwindSafe(|| work(&mut report)))
         })
         .map_err(|e| PyRuntimeError::new_err(format!("could not start the job's thread: {e}")))?;
-    let stop = |py: Python<'_>, worker: std::thread::JoinHandle<_>, e: PyErr| -> PyResult<T> {
-        request_stop(true);
+    let end = |py: Python<'_>, worker: std::thread::JoinHandle<_>, e: PyErr| -> PyResult<T> {
+        stop.store(true, Ordering::SeqCst);
         let _ = py.detach(|| worker.join());
-        request_stop(false);
         Err(e)
     };
     let mut rx = rx;
@@ -73,7 +76,7 @@ fn detached<T: Send + 'static>(py: Python<'_>, progress: Option<Py<PyAny>>, work
             Ok(p) => {
                 if let Some(f) = &progress {
                     if let Err(e) = f.call1(py, (p.algorithm, p.t, p.steps, p.halved)) {
-                        return stop(py, worker, e);
+                        return end(py, worker, e);
                     }
                 }
             }
@@ -81,20 +84,15 @@ fn detached<T: Send + 'static>(py: Python<'_>, progress: Option<Py<PyAny>>, work
             Err(RecvTimeoutError::Disconnected) => break,
         }
         if let Err(e) = py.check_signals() {
-            return stop(py, worker, e);
+            return end(py, worker, e);
         }
     }
     let outcome = py.detach(|| worker.join()).map_err(|_| PyRuntimeError::new_err("the job's thread ended abnormally"))?;
-    request_stop(false);
     match outcome {
         Ok(r) => r,
         Err(payload) if payload.is::<Stopped>() => Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("")),
         Err(payload) => {
-            let what = payload
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
+            let what = payload.downcast_ref::<String>().cloned().or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
             Err(PyRuntimeError::new_err(format!("deformesh panicked (a bug: please report it with the input): {what}")))
         }
     }
@@ -166,6 +164,8 @@ fn curve_live(py: Python<'_>, library: PathBuf, argv: Vec<String>, cad: bool, pr
         let curved = r.curved.take().expect("a run into memory returns its mesh");
         Ok((serde_json::to_value(&r).expect("the report serialises"), curved, p))
     })?;
+    // a Ctrl-C after the job's last poll: the model stays as it was
+    py.check_signals()?;
     // not interruptible: the model is written whole
     let clock = std::time::Instant::now();
     let written = py.detach(|| live::write_back(&library, &curved, p)).map_err(|e| run_error(e.into(), None))?;

@@ -10,17 +10,17 @@ import numpy as np
 import pytest
 
 import deformesh
-from conftest import check_curved, fillet_part, groups, prism_layer, quad_layer, snapshot
+from conftest import check_curved, element_tags, fillet_part, groups, prism_layer, quad_layer, snapshot
 from models import periodic_channel
 
 
 def curve_and_check(order, tmp_path, **options):
     before = groups()
-    linear = gmsh.model.mesh.getElements(gmsh.model.getDimension())[1]
+    linear = element_tags()
     report = deformesh.gmsh.curve(order=order, progress=False, **options)
-    # every cell of the model was curved and written back
-    after = gmsh.model.mesh.getElements(gmsh.model.getDimension())[1]
-    assert sum(len(e) for e in after) == sum(len(e) for e in linear) == report["cells"]
+    # every element of every entity is there, of the same tag
+    assert element_tags() == linear
+    assert sum(len(v) for (d, _), v in linear.items() if d == gmsh.model.getDimension()) == report["cells"]
     return report, check_curved(order, report, before, tmp_path)
 
 
@@ -43,6 +43,8 @@ def test_a_quad_boundary_layer_is_curved_in_place(session, tmp_path):
 def test_a_prism_layer_is_curved_in_place(session, tmp_path):
     prism_layer()
     assert gmsh.model.mesh.getElementTypes(3) == [6]
+    # p = 2: Gmsh 4.15's minDetJac of a prism of order 3 raises
+    # "FaceClosureFull not implemented for prisms of order 3" (measured)
     curve_and_check(2, tmp_path)
     assert list(gmsh.model.mesh.getElementTypes(3)) == [13], "PRI_18"
 

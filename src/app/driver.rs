@@ -64,7 +64,7 @@ pub enum RunError {
         /// Their element tags in the input file.
         tags: Vec<u64>,
     },
-    /// [`request_stop`] was called (the Python package's Ctrl-C): the run
+    /// The run's stop request ([`stop_on`]) was set (the Python package's Ctrl-C): the run
     /// ended before writing anything.
     #[error("interrupted: nothing was written or changed")]
     Interrupted,
@@ -706,6 +706,9 @@ pub fn run_setup_with<M: Outputs<D, N>, const D: usize, const N: usize>(
     };
     report.time.total_s = clock.elapsed().as_secs_f64();
     report.time.peak_memory_mib = super::bench::peak_memory_mib();
+    if stop_requested() {
+        return Err(RunError::Interrupted);
+    }
     write_set(out_dir, &files, REPORT, serde_json::to_value(&report).expect("report serialises"), &run_claim(force))?;
     Ok(report)
 }
@@ -746,21 +749,24 @@ pub enum Sink {
     Memory,
 }
 
-/// Set by [`request_stop`]; read where a run may end without harm.
-static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Asks the runs of this process to stop (`true`) before they write
-/// anything, or clears the request (`false`): the Python package's
-/// Ctrl-C, which must leave files and models as they were. The command
-/// line's Ctrl-C is a signal handler of its own
-/// ([`crate::io::folder::install_interrupt_handler`]).
-pub fn request_stop(stop: bool) {
-    STOP.store(stop, std::sync::atomic::Ordering::SeqCst);
+thread_local! {
+    /// This thread's stop request ([`stop_on`]), if it has one.
+    static STOP: std::cell::RefCell<Option<std::sync::Arc<std::sync::atomic::AtomicBool>>> = const { std::cell::RefCell::new(None) };
 }
 
-/// Whether [`request_stop`] asked the runs to stop.
+/// Makes `token` the stop request of the runs on this thread: once it is
+/// set they end before they write anything ([`RunError::Interrupted`]).
+/// The Python package's Ctrl-C, which must leave files and models as they
+/// were; a token per job, so that one caller's Ctrl-C stops its own job
+/// only. The command line's Ctrl-C is a signal handler of its own
+/// ([`crate::io::folder::install_interrupt_handler`]).
+pub fn stop_on(token: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>) {
+    STOP.with(|s| *s.borrow_mut() = token);
+}
+
+/// Whether this thread's stop request ([`stop_on`]) is set.
 pub fn stop_requested() -> bool {
-    STOP.load(std::sync::atomic::Ordering::SeqCst)
+    STOP.with(|s| s.borrow().as_ref().is_some_and(|t| t.load(std::sync::atomic::Ordering::SeqCst)))
 }
 
 /// What `deformesh curve` is asked to do.
@@ -1548,6 +1554,9 @@ fn curve_mesh<M: Curvable<D>, const D: usize>(
     report.outputs = files.iter().map(|f| f.0.clone()).chain(std::iter::once(report_name.clone())).collect();
     report.total_s = clock.elapsed().as_secs_f64();
     report.peak_memory_mib = super::bench::peak_memory_mib();
+    if stop_requested() {
+        return Err(RunError::Interrupted);
+    }
     write_set(&dir, &files, &report_name, serde_json::to_value(&report).expect("report serialises"), &claim)?;
     Ok(report)
 }

@@ -40,6 +40,7 @@ fn agrees(name: &str, dir: &Path, (input, geometry): (PathBuf, &str), order: usi
 }
 
 #[test]
+#[ignore = "heavy (23 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn the_band_solve_agrees_with_the_whole_mesh_solve() {
     let dir = tempfile::tempdir().unwrap();
     let default = CurveOptions::default().band.unwrap();
@@ -62,6 +63,7 @@ fn the_band_solve_agrees_with_the_whole_mesh_solve() {
 }
 
 #[test]
+#[ignore = "heavy (33 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn the_multigrid_keeps_its_iterations_on_thin_layers() {
     // the extruded cylinder family of the thin-layer issue, first layers
     // 1e-1 … 1e-5, through the multigrid alone: with line relaxation the
@@ -130,6 +132,7 @@ fn curve_snap_first(dir: &Path, input: PathBuf, geometry: &str, order: usize, na
 }
 
 #[test]
+#[ignore = "heavy (74 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn the_snap_is_kept_where_every_element_stays_valid_and_shaped() {
     // the ball octant's cells are not thin: putting the new sphere nodes
     // on the sphere, as Gmsh's setOrder does, keeps every element valid

@@ -250,6 +250,7 @@ fn a_filleted_box_of_tetrahedra_is_curved_onto_its_faces_and_their_edges() {
 }
 
 #[test]
+#[ignore = "heavy (80 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn an_extruded_naca_wing_of_hexahedra_is_curved_onto_its_step() {
     // the file saves no line elements (groups on surfaces only): the new
     // nodes along the wing's edges are put on their curves all the same
@@ -267,6 +268,7 @@ fn an_extruded_naca_wing_of_hexahedra_is_curved_onto_its_step() {
 /// left 1.95e-4 against setOrder's 8.5e-5; the fitted places leave 1.4e-6
 /// (measured, and Gmsh's measure of it agrees).
 #[test]
+#[ignore = "heavy (50 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn the_full_wing_at_p3_fits_its_nose_closer_than_gmsh() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, model_file, peers) = model(dir.path(), "wing", &["--size", "0.05", "--peers", "3"]);

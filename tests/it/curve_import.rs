@@ -391,6 +391,7 @@ fn cylinder_bl(out: &Path, first: f64, wall_size: f64, options: &[String]) -> Ve
 }
 
 #[test]
+#[ignore = "heavy (64 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn extruded_thin_boundary_layers_with_slip_end_planes_stay_valid_at_p2_and_p3() {
     // first layers of 1e-5 and 1e-3 on the cylinder wall, the end planes
     // slip: the new nodes on the coarse edges inside the end planes must
@@ -470,6 +471,7 @@ fn sphere_bl(dir: &Path, first: f64, n: usize, order: Option<usize>) -> (PathBuf
 }
 
 #[test]
+#[ignore = "heavy (41 s on 2 cores): benches/heavy_tests.sh runs it"]
 fn a_hex_boundary_layer_around_a_sphere_stays_valid_at_p2_and_p3() {
     // a first layer of 1e-4 around a sphere, the box fixed: every element
     // certified valid, where Gmsh's own setOrder leaves the first layer's

@@ -459,7 +459,9 @@ fn by_set_order(l: &Live, curved: &Layout, p: usize) -> Result<WrittenBack, CadE
         let mut place: std::collections::HashMap<usize, [f64; 3]> = std::collections::HashMap::new();
         let mut done = WrittenBack::default();
         for e in &curved.elements {
-            let Some(theirs) = element.get(&(e.tag as usize)) else { continue };
+            let Some(theirs) = element.get(&(e.tag as usize)) else {
+                return Err(changed(format!("element {} is not in the model", e.tag)));
+            };
             let perm = gmsh_perm(e.shape, e.order);
             if theirs.len() != perm.len() {
                 return Err(changed(format!("element {} has {} nodes in Gmsh and {} in the curved mesh", e.tag, theirs.len(), perm.len())));
@@ -544,6 +546,9 @@ fn put(l: &Live, curved: &Layout) -> Result<WrittenBack, CadError> {
 /// Moves each node to its place, with its parameters on the curve or
 /// surface it is classified on.
 fn set_nodes(l: &Live, place: &std::collections::HashMap<usize, [f64; 3]>) -> Result<(), CadError> {
+    if place.is_empty() {
+        return Ok(());
+    }
     for d in 0..=3 {
         for (_, t) in l.s.entities(d)? {
             let (tags, _) = l.nodes(d, t)?;
