@@ -15,12 +15,12 @@ use std::sync::mpsc::{channel, RecvTimeoutError};
 use std::time::Duration;
 
 use deformesh::app::driver::{exit, stop_on, stop_requested, CurveJob, Progress, RunError, Sink};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use deformesh::geometry::cad::{live, CadModel};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyRuntimeError};
 use pyo3::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 create_exception!(_deformesh, Failure, PyException, "A job of deformesh failed: args are (exit code, message), the command line's.");
 
@@ -92,7 +92,11 @@ fn detached<T: Send + 'static>(py: Python<'_>, progress: Option<Py<PyAny>>, work
         Ok(r) => r,
         Err(payload) if payload.is::<Stopped>() => Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("")),
         Err(payload) => {
-            let what = payload.downcast_ref::<String>().cloned().or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
+            let what = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
             Err(PyRuntimeError::new_err(format!("deformesh panicked (a bug: please report it with the input): {what}")))
         }
     }

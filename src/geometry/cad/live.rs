@@ -21,6 +21,13 @@ use crate::io::msh::{gmsh_perm, msh_type, shape_of};
 
 type ErrPtr = *mut c_int;
 
+/// Elements of one type: the type, the element tags and their nodes'
+/// tags (Gmsh's local order).
+type Block = (i32, Vec<usize>, Vec<usize>);
+
+/// Element tags and their nodes' tags.
+type Tagged = (Vec<usize>, Vec<usize>);
+
 /// The mesh calls of Gmsh's C API (`gmshc.h`, 4.11 and later).
 struct MeshApi {
     get_current: unsafe extern "C" fn(*mut *mut c_char, ErrPtr),
@@ -138,7 +145,7 @@ impl Live<'_> {
 
     /// Per element type on (dim, tag): the type, the element tags and
     /// their nodes' tags.
-    fn elements(&self, dim: i32, tag: i32) -> Result<Vec<(i32, Vec<usize>, Vec<usize>)>, CadError> {
+    fn elements(&self, dim: i32, tag: i32) -> Result<Vec<Block>, CadError> {
         let (mut types, mut ntypes) = (std::ptr::null_mut(), 0usize);
         let (mut et, mut et_n, mut et_nn) = (std::ptr::null_mut(), std::ptr::null_mut(), 0usize);
         let (mut nt, mut nt_n, mut nt_nn) = (std::ptr::null_mut(), std::ptr::null_mut(), 0usize);
@@ -516,7 +523,8 @@ fn put(l: &Live, curved: &Layout) -> Result<WrittenBack, CadError> {
     tracing::info!("nodes added: {:.3}s", clock.elapsed().as_secs_f64());
     set_nodes(l, &moved)?;
     tracing::info!("nodes moved: {:.3}s", clock.elapsed().as_secs_f64());
-    let mut blocks: std::collections::BTreeMap<(i32, i32, i64), (Vec<usize>, Vec<usize>)> = Default::default();
+    // by (dim, entity, type): the element tags and their nodes' tags
+    let mut blocks: std::collections::BTreeMap<(i32, i32, i64), Tagged> = std::collections::BTreeMap::new();
     let mut done = WrittenBack {
         elements: 0,
         nodes: add.values().map(Vec::len).sum::<usize>() + moved.len(),
