@@ -290,7 +290,7 @@ impl Session {
         v
     }
 
-    pub(super) fn set_option(&mut self, name: &str, value: f64) -> Result<(), CadError> {
+    pub(super) fn set_option(&self, name: &str, value: f64) -> Result<(), CadError> {
         let c = CString::new(name).expect("option names have no NUL");
         let mut ierr = 0;
         unsafe { (self.api.option_set_number)(c.as_ptr(), value, &mut ierr) };

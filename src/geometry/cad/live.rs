@@ -33,7 +33,6 @@ struct MeshApi {
     get_current: unsafe extern "C" fn(*mut *mut c_char, ErrPtr),
     get_dimension: unsafe extern "C" fn(ErrPtr) -> c_int,
     option_get_number: unsafe extern "C" fn(*const c_char, *mut f64, ErrPtr),
-    option_set_number: unsafe extern "C" fn(*const c_char, f64, ErrPtr),
     get_physical_groups: unsafe extern "C" fn(*mut *mut c_int, *mut usize, c_int, ErrPtr),
     get_physical_name: unsafe extern "C" fn(c_int, c_int, *mut *mut c_char, ErrPtr),
     groups_for_entity: unsafe extern "C" fn(c_int, c_int, *mut *mut c_int, *mut usize, ErrPtr),
@@ -58,7 +57,6 @@ impl MeshApi {
                 get_current: symbol(lib, path, "gmshModelGetCurrent")?,
                 get_dimension: symbol(lib, path, "gmshModelGetDimension")?,
                 option_get_number: symbol(lib, path, "gmshOptionGetNumber")?,
-                option_set_number: symbol(lib, path, "gmshOptionSetNumber")?,
                 get_physical_groups: symbol(lib, path, "gmshModelGetPhysicalGroups")?,
                 get_physical_name: symbol(lib, path, "gmshModelGetPhysicalName")?,
                 groups_for_entity: symbol(lib, path, "gmshModelGetPhysicalGroupsForEntity")?,
@@ -102,13 +100,6 @@ impl Live<'_> {
         let (mut v, mut ierr) = (0.0, 0);
         unsafe { (self.api.option_get_number)(c.as_ptr(), &mut v, &mut ierr) };
         self.s.check(ierr, name).map(|()| v)
-    }
-
-    fn set_option(&self, name: &str, value: f64) -> Result<(), CadError> {
-        let c = CString::new(name).expect("option names have no NUL");
-        let mut ierr = 0;
-        unsafe { (self.api.option_set_number)(c.as_ptr(), value, &mut ierr) };
-        self.s.check(ierr, name)
     }
 
     /// `(dim, tag, name)` of every physical group (name empty if none).
@@ -304,6 +295,14 @@ fn entities_section(l: &Live, entities: &[Vec<i32>], text: &mut String) -> Resul
     Ok(())
 }
 
+/// The first line of `$Nodes` and `$Elements`: the blocks, the items and
+/// the least and largest tag of the items (`tags`, one slice per block).
+fn section_counts<'a>(blocks: usize, tags: impl Iterator<Item = &'a [usize]> + Clone) -> String {
+    let count: usize = tags.clone().map(<[usize]>::len).sum();
+    let (lo, hi) = tags.flatten().fold((usize::MAX, 0), |(lo, hi), &t| (lo.min(t), hi.max(t)));
+    format!("{blocks} {count} {} {hi}", lo.min(hi))
+}
+
 fn nodes_section(l: &Live, entities: &[Vec<i32>], text: &mut String) -> Result<(), CadError> {
     let mut blocks = Vec::new();
     for (d, tags) in entities.iter().enumerate() {
@@ -314,9 +313,7 @@ fn nodes_section(l: &Live, entities: &[Vec<i32>], text: &mut String) -> Result<(
             }
         }
     }
-    let count: usize = blocks.iter().map(|b| b.2.len()).sum();
-    let (lo, hi) = blocks.iter().flat_map(|b| b.2.iter()).fold((usize::MAX, 0), |(lo, hi), &t| (lo.min(t), hi.max(t)));
-    let _ = writeln!(text, "$Nodes\n{} {count} {} {hi}", blocks.len(), lo.min(hi));
+    let _ = writeln!(text, "$Nodes\n{}", section_counts(blocks.len(), blocks.iter().map(|b| b.2.as_slice())));
     for (d, t, n, x) in &blocks {
         let _ = writeln!(text, "{d} {t} 0 {}", n.len());
         n.iter().for_each(|tag| {
@@ -349,9 +346,7 @@ fn elements_section(l: &Live, entities: &[Vec<i32>], dim: usize, text: &mut Stri
             }
         }
     }
-    let count: usize = blocks.iter().map(|b| b.3.len()).sum();
-    let (lo, hi) = blocks.iter().flat_map(|b| b.3.iter()).fold((usize::MAX, 0), |(lo, hi), &t| (lo.min(t), hi.max(t)));
-    let _ = writeln!(text, "$Elements\n{} {count} {} {hi}", blocks.len(), lo.min(hi));
+    let _ = writeln!(text, "$Elements\n{}", section_counts(blocks.len(), blocks.iter().map(|b| b.3.as_slice())));
     for (d, t, ty, e, n) in &blocks {
         let _ = writeln!(text, "{d} {t} {ty} {}", e.len());
         let per = n.len() / e.len().max(1);
@@ -434,11 +429,11 @@ fn by_set_order(l: &Live, curved: &Layout, p: usize) -> Result<WrittenBack, CadE
             .into_iter()
             .map(|o| l.option(o).map(|v| (o, v)))
             .collect::<Result<_, _>>()?;
-        saved.iter().try_for_each(|(o, v)| l.set_option(o, if *o == "General.Verbosity" { v.min(1.0) } else { 0.0 }))?;
+        saved.iter().try_for_each(|(o, v)| l.s.set_option(o, if *o == "General.Verbosity" { v.min(1.0) } else { 0.0 }))?;
         let clock = std::time::Instant::now();
         let ordered = l.set_order(p);
         tracing::info!("Gmsh's setOrder({p}): {:.3}s", clock.elapsed().as_secs_f64());
-        saved.iter().try_for_each(|(o, v)| l.set_option(o, *v))?;
+        saved.iter().try_for_each(|(o, v)| l.s.set_option(o, *v))?;
         ordered?;
         let changed = |what: String| CadError::Gmsh {
             call: "deformesh.gmsh.curve".into(),
