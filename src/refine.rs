@@ -1335,11 +1335,22 @@ impl<const D: usize> RefineBoundary<D> {
         }
         let lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
         let count = lines.len();
-        // each line's fit is independent of the others and of their order
-        // (on CAD the projections queue for Gmsh's lock)
-        let fits: Fits = lines.into_par_iter().map(|(key, places)| (key, self.fit_line(key, places))).collect();
+        // each line's fit is independent of the others and of their order;
+        // on CAD from one thread ([`ClosestPoint::serial`])
+        let fit = |(key, places): (LineKey, Vec<f64>)| (key, self.fit_line(key, places));
+        let fits: Fits = if self.serial() { lines.into_iter().map(fit).collect() } else { lines.into_par_iter().map(fit).collect() };
         tracing::info!("settling: {count} lines of new nodes fitted in {:.2} s", t0.elapsed().as_secs_f64());
         fits
+    }
+
+    /// Whether a shape of its carriers answers from one thread at a time
+    /// ([`ClosestPoint::serial`]).
+    fn serial(&self) -> bool {
+        let parts = self.parts.iter().any(|p| match &p.kind {
+            PartKind::Move { target, .. } => target.serial(),
+            _ => false,
+        });
+        parts || self.carriers.iter().any(|c| c.curve.as_ref().is_some_and(|s| s.serial()))
     }
 
     /// One line's fit, from its nodes' reference places (inner nodes of

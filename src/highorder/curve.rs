@@ -1758,17 +1758,26 @@ pub struct BoundaryError {
 /// Per part, the largest of `f(boundary element, shape)` over the boundary
 /// elements of moving (and curved slip) parts; 0 for other parts.
 fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: impl Fn(Facet, &std::sync::Arc<dyn crate::deform::BoundaryShape<D>>) -> f64 + Sync) -> Vec<f64> {
-    (0..mesh.boundary.len())
-        .into_par_iter()
-        .map(|b| mesh.boundary.get(b))
-        .filter_map(|b| match &parts.get(b.part)?.kind {
+    let one = |b: usize| {
+        let b = mesh.boundary.get(b);
+        match &parts.get(b.part)?.kind {
             PartKind::Move { target, .. } => Some((b.part, f(b, target))),
             _ => None,
-        })
-        .fold(|| vec![0.0; parts.len()], |mut w, (k, d)| {
-            w[k] = f64::max(w[k], d);
-            w
-        })
+        }
+    };
+    let most = |mut w: Vec<f64>, (k, d): (usize, f64)| {
+        w[k] = f64::max(w[k], d);
+        w
+    };
+    // a CAD shape answers from one thread ([`crate::geometry::ClosestPoint::serial`])
+    let serial = parts.iter().any(|p| matches!(&p.kind, PartKind::Move { target, .. } if target.serial()));
+    if serial {
+        return (0..mesh.boundary.len()).filter_map(one).fold(vec![0.0; parts.len()], most);
+    }
+    (0..mesh.boundary.len())
+        .into_par_iter()
+        .filter_map(one)
+        .fold(|| vec![0.0; parts.len()], most)
         .reduce(|| vec![0.0; parts.len()], |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect())
 }
 
@@ -1781,19 +1790,8 @@ fn sampled_per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<
     let weights: Vec<(Shape, Vec<Vec<f64>>)> = kinds.into_iter().map(|k| Ok((k, facet_sample_weights(k, mesh.p, mesh.spacing, m)?))).collect::<Result<_, HighOrderError>>()?;
     Ok(per_part(mesh, parts, |b, target| {
         let of_kind = &weights.iter().find(|w| w.0 == b.shape).expect("validated facets").1;
-        let at: Vec<[f64; D]> = of_kind
-            .iter()
-            .map(|w| {
-                let mut x = [0.0; D];
-                for (&wi, &node) in w.iter().zip(b.nodes) {
-                    for (xd, nd) in x.iter_mut().zip(mesh.nodes[node]) {
-                        *xd += wi * nd;
-                    }
-                }
-                x
-            })
-            .collect();
-        at.iter().zip(target.closest_points(&at)).map(|(&p, q)| crate::numeric::norm(crate::numeric::sub(p, q))).fold(0.0f64, f64::max)
+        let nodes: Vec<[f64; D]> = b.nodes.iter().map(|&n| mesh.nodes[n]).collect();
+        target.largest_sample_distance(&nodes, of_kind)
     }))
 }
 
