@@ -26,6 +26,17 @@ pub fn scale<const D: usize>(k: f64, a: [f64; D]) -> [f64; D] {
     a.map(|c| k * c)
 }
 
+/// `Σ_j w[j] x[j]`: a point mixed from others by weights.
+pub fn mix<const D: usize>(w: &[f64], x: &[[f64; D]]) -> [f64; D] {
+    let mut out = [0.0; D];
+    for (&wj, xj) in w.iter().zip(x) {
+        for (o, c) in out.iter_mut().zip(xj) {
+            *o += wj * c;
+        }
+    }
+    out
+}
+
 /// a · b.
 pub fn dot<const D: usize>(a: [f64; D], b: [f64; D]) -> f64 {
     (0..D).map(|i| a[i] * b[i]).sum()

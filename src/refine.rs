@@ -1346,11 +1346,7 @@ impl<const D: usize> RefineBoundary<D> {
     /// Whether a shape of its carriers answers from one thread at a time
     /// ([`ClosestPoint::serial`]).
     fn serial(&self) -> bool {
-        let parts = self.parts.iter().any(|p| match &p.kind {
-            PartKind::Move { target, .. } => target.serial(),
-            _ => false,
-        });
-        parts || self.carriers.iter().any(|c| c.curve.as_ref().is_some_and(|s| s.serial()))
+        self.parts.iter().any(BoundaryPart::serial) || self.carriers.iter().any(|c| c.curve.as_ref().is_some_and(|s| s.serial()))
     }
 
     /// One line's fit, from its nodes' reference places (inner nodes of

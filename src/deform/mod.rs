@@ -138,6 +138,12 @@ pub(crate) fn check_meeting<const D: usize>(parts: &[BoundaryPart<D>], a: usize,
 }
 
 impl<const D: usize> BoundaryPart<D> {
+    /// Whether its target answers from one thread at a time (CAD:
+    /// [`crate::geometry::ClosestPoint::serial`]).
+    pub(crate) fn serial(&self) -> bool {
+        matches!(&self.kind, PartKind::Move { target, .. } if target.serial())
+    }
+
     /// The image X(p) on the target of a starting point p of a moving part.
     pub(crate) fn image(&self, p: [f64; D]) -> Option<[f64; D]> {
         match &self.kind {

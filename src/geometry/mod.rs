@@ -40,7 +40,7 @@ pub use curve::{Shape, ShapeSpec};
 pub use level_set::LevelSet;
 pub use surface::{Surface, SurfaceSpec};
 
-use crate::numeric::{norm, sub};
+use crate::numeric::{mix, norm, sub};
 use std::any::Any;
 use std::sync::Arc;
 
@@ -237,15 +237,4 @@ const RAY_ORIGIN_TOL: f64 = 1e-12;
 /// round-off in the intersection arithmetic.
 fn ray_s_min<const D: usize>(origin: [f64; D], dir: [f64; D], reference: [f64; D], size: f64) -> f64 {
     RAY_ORIGIN_TOL * (size + norm(sub(origin, reference))) / norm(dir)
-}
-
-/// `Σ_j w[j] x[j]`.
-pub(crate) fn mix<const K: usize>(w: &[f64], x: &[[f64; K]]) -> [f64; K] {
-    let mut out = [0.0; K];
-    for (&wj, xj) in w.iter().zip(x) {
-        for (o, c) in out.iter_mut().zip(xj) {
-            *o += wj * c;
-        }
-    }
-    out
 }

@@ -1770,8 +1770,7 @@ fn per_part<const D: usize>(mesh: &CurvedMesh<D>, parts: &[BoundaryPart<D>], f: 
         w
     };
     // a CAD shape answers from one thread ([`crate::geometry::ClosestPoint::serial`])
-    let serial = parts.iter().any(|p| matches!(&p.kind, PartKind::Move { target, .. } if target.serial()));
-    if serial {
+    if parts.iter().any(BoundaryPart::serial) {
         return (0..mesh.boundary.len()).filter_map(one).fold(vec![0.0; parts.len()], most);
     }
     (0..mesh.boundary.len())

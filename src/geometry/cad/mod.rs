@@ -32,8 +32,8 @@ pub mod classify;
 mod gmsh;
 pub mod live;
 
-use super::{mix, ClosestPoint};
-use crate::numeric::{cross3, dist2, dot, norm, sub, unit};
+use super::ClosestPoint;
+use crate::numeric::{cross3, dist2, dot, mix, norm, sub, unit};
 use std::collections::HashMap;
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
