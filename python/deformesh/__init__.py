@@ -136,7 +136,7 @@ def curve(mesh, *, order: int = 3, cad=None, geometry=None, out=None, format=Non
     extension chooses the format: .msh, .mesh MFEM, .inp ABAQUS; VTU, PNG
     and report beside it); without, nothing is left on disk. `options`:
     the method's (spacing, steps, mode, solver, shape_tolerance, band,
-    snap), as on the command line."""
+    snap, optimise), as on the command line."""
     if cad is None and geometry is None:
         raise TypeError("deformesh.curve: give cad= (the CAD model) or geometry= (a geometry file): nothing else binds the boundary")
     with tempfile.TemporaryDirectory(prefix="deformesh-") as tmp:

@@ -12,6 +12,7 @@ _FLAGS = {
     "shape_tolerance": "--shape-tolerance",
     "band": "--band",
     "snap": "--snap",
+    "optimise": "--optimise",
 }
 
 

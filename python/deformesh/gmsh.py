@@ -25,7 +25,7 @@ def curve(order: int = 3, *, cad: bool = True, geometry=None, progress=True, **o
     fixed or another shape (with cad=False it binds the boundary alone).
 
     `options`: the method's, as on the command line: spacing, steps, mode,
-    solver, shape_tolerance, band, snap.
+    solver, shape_tolerance, band, snap, optimise.
 
     Refuses, raising and changing nothing, when any element would be
     invalid (InvalidMeshError) or the input is wrong (InputError, …).

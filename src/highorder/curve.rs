@@ -67,6 +67,11 @@ pub struct CurveOptions {
     /// Off by default in the library (the method is Algorithm 2); `curve`'s
     /// `--snap auto`, its default, turns it on.
     pub snap_first: bool,
+    /// Then raise the least distortion of the simplices (Gmsh's `minSJ`)
+    /// by moving their inner nodes ([`super::optimise`]). Off by default
+    /// in the library; `curve`'s `--optimise auto`, its default, turns it
+    /// on.
+    pub optimise: bool,
 }
 
 /// The default of [`CurveOptions::shape_tolerance`]: 1e-3 of the local
@@ -98,7 +103,7 @@ pub const AUTO_STEPS: [usize; 4] = [1, 2, 4, 8];
 
 impl Default for CurveOptions {
     fn default() -> Self {
-        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE, band: Some(ALG2_BAND), snap_first: false }
+        CurveOptions { order: 3, spacing: Spacing::Equispaced, steps: None, step_change: CURVE_STEP_CHANGE, flow: DeformOptions::default(), samples: 16, dirichlet: false, settle: true, shape_tolerance: DEFAULT_SHAPE_TOLERANCE, band: Some(ALG2_BAND), snap_first: false, optimise: false }
     }
 }
 
@@ -936,6 +941,7 @@ where
             (pass, attempts, parts2)
         }
     };
+    let pass = if opts.optimise { optimise_pass(pass, sub.fine.nodes(), &mut repair, &mut certify_s)? } else { pass };
     let Pass { mesh, certificates, mut quality, stats, solver, moved_distance } = pass;
     quality.snap_first = snap_first;
     quality.repair = repair;
@@ -960,6 +966,22 @@ where
     quality.first_layer_change = first_layer_change(&mesh, sub.fine.nodes(), &parts2);
     let seconds = (alg2, certify_s + clock.elapsed().as_secs_f64());
     Ok(Curved { mesh, certificates, quality, stats, attempts, solver, seconds, coarse_nodes: sub.coarse_nodes.clone() })
+}
+
+/// `pass` with its simplices' inner nodes moved to raise their least
+/// distortion ([`super::optimise`]), every element certified again where
+/// it changed; the search's figures in `repair`.
+fn optimise_pass<const D: usize>(pass: Pass<D>, straight: &[[f64; D]], repair: &mut Repair, certify_s: &mut f64) -> Result<Pass<D>, CurveError> {
+    let t0 = Instant::now();
+    let Some(super::optimise::Moved { nodes, changed, report }) = super::optimise::optimised(&pass.mesh, &pass.certificates, straight) else { return Ok(pass) };
+    let mesh = CurvedMesh { nodes, ..pass.mesh };
+    let known: BTreeMap<usize, Certificate> = (0..pass.certificates.len()).map(|c| (c, changed.get(&c).copied().unwrap_or(pass.certificates[c]))).collect();
+    let (certificates, q) = certify_mesh_straight(&mesh, straight, &known)?;
+    let quality = CurvedQuality { min_det_j: q.min_det_j, min_det_j_attained: q.min_det_j_attained, max_det_j: q.max_det_j, scaled_jacobian: q.scaled_jacobian, invalid_elements: q.invalid_elements, ..pass.quality };
+    *certify_s += t0.elapsed().as_secs_f64();
+    tracing::info!("optimised: {} inner nodes of {} elements moved, the least distortion from {:.4} to {:.4} in {:.2} s, {} visits, {} evaluations ({})", report.nodes_moved, report.elements_changed, report.least_distortion_before, report.least_distortion, report.seconds, report.visits, report.evaluations, report.ended);
+    repair.optimised = Some(report);
+    Ok(Pass { mesh, certificates, quality, ..pass })
 }
 
 /// Algorithm 2 with its fallbacks and the settling pass: the pass kept,
@@ -1440,7 +1462,7 @@ where
 }
 
 /// The subdivided mesh as a curved mesh with `nodes`.
-fn fine_mesh<M, const D: usize>(sub: &Subdivision<M, D>, names: &[String], spacing: Spacing, nodes: Vec<[f64; D]>) -> CurvedMesh<D> {
+pub(super) fn fine_mesh<M, const D: usize>(sub: &Subdivision<M, D>, names: &[String], spacing: Spacing, nodes: Vec<[f64; D]>) -> CurvedMesh<D> {
     CurvedMesh {
         shape: sub.shape,
         p: sub.p,

@@ -6,6 +6,7 @@
 
 pub mod blend;
 pub mod curve;
+pub mod optimise;
 pub mod repair;
 
 /// The element itself (node sets, bases, node orders) is core data of the

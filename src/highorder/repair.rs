@@ -63,6 +63,10 @@ pub struct Repair {
     pub won: String,
     /// Why it won.
     pub why: String,
+    /// The search that then raised the least distortion of its simplices,
+    /// if it moved a node ([`super::optimise`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub optimised: Option<super::optimise::Optimised>,
 }
 
 /// One candidate result.
@@ -103,13 +107,13 @@ impl Candidate {
 }
 
 /// Elements by node: for each node, the elements that hold it.
-struct NodeElements {
+pub(super) struct NodeElements {
     first: Vec<usize>,
     of: Vec<usize>,
 }
 
 impl NodeElements {
-    fn new<const D: usize>(mesh: &CurvedMesh<D>) -> Self {
+    pub(super) fn new<const D: usize>(mesh: &CurvedMesh<D>) -> Self {
         let mut first = vec![0usize; mesh.nodes.len() + 1];
         for cell in mesh.cells.iter() {
             for &n in cell {
@@ -130,7 +134,7 @@ impl NodeElements {
         NodeElements { first, of }
     }
 
-    fn of(&self, n: usize) -> &[usize] {
+    pub(super) fn of(&self, n: usize) -> &[usize] {
         &self.of[self.first[n]..self.first[n + 1]]
     }
 }

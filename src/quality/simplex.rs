@@ -297,28 +297,35 @@ impl SimplexCertifier {
 
     /// `det J = x_ξ y_η − x_η y_ξ`, its companion and its rounding count.
     fn det2<const D: usize>(&self, col: &[[Coef; D]; D], abs: &[[Coef; D]; D]) -> (Coef, Coef, usize) {
+        (self.cross2(col, -1.0), self.cross2(abs, 1.0), self.mul_gg.roundings() + 1)
+    }
+
+    /// `x_ξ y_η + s x_η y_ξ` of the columns `col` (`s = −1`: det J).
+    fn cross2<const D: usize>(&self, col: &[[Coef; D]; D], s: f64) -> Coef {
         let m = &self.mul_gg;
-        let comb = |a: Coef, s: f64, b: Coef| -> Coef { a.iter().zip(&b).map(|(x, y)| x + s * y).collect() };
-        let det = comb(m.apply(&col[0][0], &col[1][1]), -1.0, m.apply(&col[1][0], &col[0][1]));
-        let det_abs = comb(m.apply(&abs[0][0], &abs[1][1]), 1.0, m.apply(&abs[1][0], &abs[0][1]));
-        (det, det_abs, m.roundings() + 1)
+        let (a, b) = (m.apply(&col[0][0], &col[1][1]), m.apply(&col[1][0], &col[0][1]));
+        a.iter().zip(&b).map(|(x, y)| x + s * y).collect()
     }
 
     /// `det J = a · (b × c)` (columns), its companion and its rounding count.
     fn det3<const D: usize>(&self, col: &[[Coef; D]; D], abs: &[[Coef; D]; D]) -> (Coef, Coef, usize) {
         let (mg, mc) = (&self.mul_gg, self.mul_gc.as_ref().expect("tetrahedra have the second product"));
-        let triple = |cols: &[[Coef; D]; D], s: f64| -> Coef {
-            let (a, b, c) = (&cols[0], &cols[1], &cols[2]);
-            let cross = |i: usize, j: usize| -> Coef {
-                let (u, v) = (mg.apply(&b[i], &c[j]), mg.apply(&b[j], &c[i]));
-                u.iter().zip(&v).map(|(x, y)| x + s * y).collect()
-            };
-            let bc = [cross(1, 2), cross(2, 0), cross(0, 1)];
-            let t: [Coef; 3] = std::array::from_fn(|r| mc.apply(&a[r], &bc[r]));
-            (0..t[0].len()).map(|i| t[0][i] + t[1][i] + t[2][i]).collect()
-        };
         let k = mg.roundings() + 1 + mc.roundings() + 2;
-        (triple(col, -1.0), triple(abs, 1.0), k)
+        (self.triple(col, -1.0), self.triple(abs, 1.0), k)
+    }
+
+    /// `a · (b × c)` of the columns, the cross product's differences taken
+    /// with sign `s` (`s = −1`: det J).
+    fn triple<const D: usize>(&self, cols: &[[Coef; D]; D], s: f64) -> Coef {
+        let (mg, mc) = (&self.mul_gg, self.mul_gc.as_ref().expect("tetrahedra have the second product"));
+        let (a, b, c) = (&cols[0], &cols[1], &cols[2]);
+        let cross = |i: usize, j: usize| -> Coef {
+            let (u, v) = (mg.apply(&b[i], &c[j]), mg.apply(&b[j], &c[i]));
+            u.iter().zip(&v).map(|(x, y)| x + s * y).collect()
+        };
+        let bc = [cross(1, 2), cross(2, 0), cross(0, 1)];
+        let t: [Coef; 3] = std::array::from_fn(|r| mc.apply(&a[r], &bc[r]));
+        (0..t[0].len()).map(|i| t[0][i] + t[1][i] + t[2][i]).collect()
     }
 
     /// The two halves of a piece, bisecting its longest reference edge
@@ -382,6 +389,44 @@ impl SimplexCertifier {
         let neg: Coef = parts.det.iter().map(|c| -c).collect();
         let (min, neg, splits) = brackets(parts.det, neg, err, opts, |c, e, g| self.bound_min(c, e, g));
         Certificate::of_normalised(D, s, min, neg, (min_det, min_sj), splits)
+    }
+
+    /// The two figures the optimiser of [`crate::highorder::optimise`]
+    /// weighs, without the bounds' branch and bound: the least Bernstein
+    /// coefficient of det J, unsplit, in the units of `ctrl` (over the
+    /// straight element's det J it is Gmsh's `minSJ`, its
+    /// `distoShapeMeasure`), and the sampled least scaled Jacobian of
+    /// [`Self::certify`] (on the default lattice).
+    ///
+    /// # Panics
+    /// If `D` is not the shape's dimension or `ctrl` has the wrong length.
+    pub fn shape_figures<const D: usize>(&self, ctrl: &[[f64; D]]) -> (f64, f64) {
+        let (col, s) = self.columns(ctrl);
+        (self.least_of(&col, s), self.sample(&col, self.samples.0).1)
+    }
+
+    /// The first of [`Self::shape_figures`] alone: the least Bernstein
+    /// coefficient of det J, in the units of `ctrl`.
+    pub fn least_coefficient<const D: usize>(&self, ctrl: &[[f64; D]]) -> f64 {
+        let (col, s) = self.columns(ctrl);
+        self.least_of(&col, s)
+    }
+
+    /// The least coefficient of det J from the columns of the normalised
+    /// element of scale `s`, in the units of the element.
+    fn least_of<const D: usize>(&self, col: &[[Coef; D]; D], s: f64) -> f64 {
+        let det = if D == 2 { self.cross2(col, -1.0) } else { self.triple(col, -1.0) };
+        det.iter().copied().fold(f64::INFINITY, f64::min) * s.powi(D as i32)
+    }
+
+    /// The Bernstein coefficients of J's columns of the element normalised
+    /// as [`Self::det_j`] does, and its scale (no companion, no rounding
+    /// bound: for figures, not proofs).
+    fn columns<const D: usize>(&self, ctrl: &[[f64; D]]) -> ([[Coef; D]; D], f64) {
+        assert!(D == self.dim && ctrl.len() == self.conv.n, "a {}-node {}D simplex given {} points in {D}D", self.conv.n, self.dim, ctrl.len());
+        let (centre, s) = normalise(ctrl);
+        let x: [Coef; D] = std::array::from_fn(|r| self.conv.apply(&ctrl.iter().map(|c| (c[r] - centre[r]) / s).collect::<Coef>()));
+        (std::array::from_fn(|c| std::array::from_fn(|r| self.deriv.apply(c, &x[r]))), s)
     }
 
     /// `(min det J, min scaled Jacobian)` of the normalised element over
