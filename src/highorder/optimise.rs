@@ -20,7 +20,7 @@
 //! takes the worst element, moves its free nodes, and ends when the worst
 //! cannot be raised (no move of its nodes raises it without lowering a
 //! neighbour below it), when every element reaches [`TARGET`], or when
-//! its budget of visits is spent. No move lowers an element's sampled
+//! its budget of visits or of element figures is spent. No move lowers an element's sampled
 //! scaled Jacobian under the mesh's least before the search, so the
 //! candidate's least scaled Jacobian stays as it was.
 
@@ -45,8 +45,9 @@ pub const TARGET: f64 = 0.9;
 const FIRST_STEP: f64 = 0.1;
 
 /// The search of one node ends when its step falls under this share of
-/// the first (a thousandth of a tenth of the element: far under what
-/// moves the figure).
+/// the first (a hundredth of a tenth of the element; at 1e-3 the least
+/// distortions measured were within 0.01 and the search took half again
+/// as long: 1.5 s against 0.97 s on the torus at p = 3).
 const LAST_STEP: f64 = 1e-2;
 
 /// Visits of the worst element at most, per element under [`TARGET`] at
@@ -235,7 +236,7 @@ fn energy(each: &[f64]) -> f64 {
 /// The simplex certifier of `shape` in `certifiers`, if it is a simplex.
 fn simplex_of(certifiers: &Certifiers, shape: Shape) -> Option<&SimplexCertifier> {
     match certifiers.of(shape) {
-        ElementCertifier::Simplex(s) if shape.is_simplex() => Some(s),
+        ElementCertifier::Simplex(s) => Some(s),
         _ => None,
     }
 }
@@ -398,9 +399,10 @@ mod tests {
         multi_indices(3, m - 1).map(|a| a.map(|i| i as f64 / (m - 1) as f64)).map(|xi| det_at(&mesh.nodes, xi) / flat).fold(f64::INFINITY, f64::min)
     }
 
-    /// Tetrahedra of the unit cube at p = 2 whose wall z = 0 is dented
-    /// (its new nodes pushed 0.12 inwards, as a snap onto a dented shape
-    /// puts them): the tetrahedra on it flatten. The search raises the
+    /// Tetrahedra of the unit cube (3 × 3 × 3 cubes) at p = 2 whose wall
+    /// z = 0 is dented (its new nodes pushed inwards by up to 0.05, a bump
+    /// vanishing at the wall's sides, as a snap onto a dented shape puts
+    /// them): the tetrahedra on it flatten. The search raises the
     /// least distortion, by the Bernstein coefficients and by a dense
     /// sampling of det J alike; the coefficient it reports bounds the
     /// sampled figure from below; no vertex and no node of a boundary
