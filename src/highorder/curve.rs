@@ -1521,6 +1521,9 @@ pub(super) struct Snap<const D: usize> {
     pub bad: Vec<usize>,
     /// Whether every element is certified valid (only sheared ones bad).
     pub valid: bool,
+    /// The least snapped scaled Jacobian of the elements to repair (−∞
+    /// where one is not certified valid).
+    pub worst: f64,
     /// Why it was not kept.
     pub why: String,
 }
@@ -1553,26 +1556,41 @@ where
     // one plan's clones: the try at equal arc length takes the lines' arc
     // places found by the fitted one
     let shared = SettlePlan::new(straight.nodes.len());
-    for fitted in [true, false] {
-        // a few elements the fitted places left valid but sheared are the
-        // repair's to mend, keeping the fit's accuracy elsewhere; equal arc
-        // length is tried where the fit sheared more (a thin layer's first
-        // cells: [`FIT_KEEP`]) or inverted one (on the OCC torus of 5,082
-        // tetrahedra at p = 2 the fitted places invert two that Gmsh's
-        // setOrder keeps valid) (on CAD each try costs projections)
-        if !fitted && refused.as_ref().is_some_and(|r| r.valid && r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64) {
-            break;
-        }
+    for first in [true, false] {
+        // a few elements the fitted places left valid but sheared keep the
+        // fit's accuracy elsewhere: only their nodes go to equal arc length
+        // (on the OCC torus of 2,271 tetrahedra at p = 2, a sliver at
+        // 0.170 straight, 0.001 at its fitted places, where Gmsh's places
+        // leave 0.0098), and what is still sheared is the repair's to
+        // mend; every node goes to equal arc length where the fit sheared
+        // more (a thin layer's first cells: [`FIT_KEEP`]) or inverted one
+        // (on the OCC torus of 5,082 tetrahedra at p = 2 the fitted places
+        // invert two that Gmsh's setOrder keeps valid) (on CAD each try
+        // costs projections)
         let mut plan = shared.clone();
-        if !fitted {
-            plan.places.fill(Settle::Arc);
+        let mut fitted = first;
+        let mut places = "fitted";
+        if !first {
+            match refused.as_ref() {
+                Some(r) if r.valid && r.bad.len() as f64 <= ARC_RETRY * straight.cells.len() as f64 => {
+                    for &c in &r.bad {
+                        for &n in &straight.cells[c] {
+                            plan.places[n] = Settle::Arc;
+                        }
+                    }
+                    (fitted, places) = (true, "fitted places but equal arc length at the sheared elements'");
+                }
+                _ => {
+                    plan.places.fill(Settle::Arc);
+                    places = "equal arc length";
+                }
+            }
         }
         let (mut nodes, moved_distance) = snapped_nodes(sub, parts, &straight.nodes, plan)?;
         let touched = super::blend::blend_into_elements(&straight, &straight.nodes, &mut nodes)?;
         let largest_move = largest_distance(&nodes, &straight.nodes);
         let snapped = CurvedMesh { nodes, ..straight.clone() };
         let t0 = Instant::now();
-        let places = if fitted { "fitted" } else { "equal arc length" };
         // validity first, by the sign alone: bracketing the minimum of an
         // element the snap inverted costs the most splits (measured: 8 s
         // a try on the extruded 1e-3 layer, 1,096 elements moved)
@@ -1598,9 +1616,9 @@ where
         let invalid: Vec<usize> = touched.iter().zip(&fresh).filter(|(_, f)| f.is_none()).map(|(&c, _)| c).collect();
         if let Some(&c) = invalid.first() {
             *certify_s += t0.elapsed().as_secs_f64();
-            if better(&refused, invalid.len(), false) {
+            if better(&refused, invalid.len(), false, f64::NEG_INFINITY) {
                 let why = format!("at {places} places, {} of the {} elements it moves are not certified valid, the first element {c}", invalid.len(), touched.len());
-                refused = Some(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad: invalid, valid: false, why });
+                refused = Some(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad: invalid, valid: false, worst: f64::NEG_INFINITY, why });
             }
             continue;
         }
@@ -1638,7 +1656,8 @@ where
         if let Some(&(c, was, now)) = lost.iter().min_by(|a, b| (a.2 / a.1).total_cmp(&(b.2 / b.1))) {
             *certify_s += t0.elapsed().as_secs_f64();
             let valid = lost.iter().all(|l| l.2.is_finite());
-            if better(&refused, lost.len(), valid) {
+            let worst = lost.iter().map(|l| l.2).fold(f64::INFINITY, f64::min);
+            if better(&refused, lost.len(), valid, worst) {
                 let now = if now.is_finite() { format!("{now:.3}") } else { "not certified valid".into() };
                 let why = format!(
                     "at {places} places, {} of the {} elements it moves fell under {} of their straight scaled Jacobian and of the straight mesh's least, or were not certified valid; the worst, element {c}: {was:.3} straight, {now} snapped",
@@ -1648,7 +1667,7 @@ where
                 );
                 let mut bad: Vec<usize> = lost.iter().map(|l| l.0).collect();
                 bad.sort_unstable();
-                refused = Some(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad, valid, why });
+                refused = Some(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad, valid, worst, why });
             }
             continue;
         }
@@ -1661,7 +1680,7 @@ where
         if !quality.invalid_elements.is_empty() {
             let why = format!("{} elements it did not move are not certified valid, the first {}", quality.invalid_elements.len(), quality.invalid_elements[0]);
             let bad = quality.invalid_elements.clone();
-            return Ok(SnapOutcome::Refused(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad, valid: false, why }));
+            return Ok(SnapOutcome::Refused(Snap { mesh: snapped, fitted, moved_distance, largest_move, bad, valid: false, worst: f64::NEG_INFINITY, why }));
         }
         quality.settling = Settling { largest_move, fitted, ..Default::default() };
         let pass = Pass { mesh: snapped, certificates, quality, stats: RunStats::default(), solver: Default::default(), moved_distance };
@@ -1676,9 +1695,10 @@ where
 pub const ARC_RETRY: f64 = 0.01;
 
 /// Whether a refused try that leaves `bad` elements to repair (all valid
-/// or not) is better than the one kept so far: valid first, then fewer.
-fn better<const D: usize>(refused: &Option<Snap<D>>, bad: usize, valid: bool) -> bool {
-    refused.as_ref().is_none_or(|r| if r.valid != valid { valid } else { bad < r.bad.len() })
+/// or not), the worst of them at scaled Jacobian `worst`, is better than
+/// the one kept so far: valid first, then fewer, then a higher worst.
+fn better<const D: usize>(refused: &Option<Snap<D>>, bad: usize, valid: bool, worst: f64) -> bool {
+    refused.as_ref().is_none_or(|r| if r.valid != valid { valid } else if bad != r.bad.len() { bad < r.bad.len() } else { worst > r.worst })
 }
 
 /// How much of an element's scaled Jacobian a snap of the settling pass
