@@ -1509,7 +1509,9 @@ pub(super) enum SnapOutcome<const D: usize> {
 pub(super) struct Snap<const D: usize> {
     /// The snapped mesh.
     pub mesh: CurvedMesh<D>,
-    /// Its new nodes are at their fitted places.
+    /// Its new nodes are at their fitted places (on the second try, all
+    /// but those of the elements the first try sheared, which are at
+    /// equal arc length: [`snap_straight`]).
     pub fitted: bool,
     /// The largest distance of a moved boundary node to its shape.
     pub moved_distance: f64,
