@@ -913,6 +913,133 @@ impl Settle {
     }
 }
 
+/// Γ_t = p0 + t (X − p0) at each starting point (its image X, else p0
+/// itself).
+fn moved<const D: usize>(p0: &[[f64; D]], images: Vec<Option<[f64; D]>>, t: f64) -> Vec<[f64; D]> {
+    p0.iter()
+        .zip(images)
+        .map(|(&p0, x)| {
+            let x = x.unwrap_or(p0);
+            let v: [f64; D] = std::array::from_fn(|i| x[i] - p0[i]);
+            std::array::from_fn(|i| p0[i] + t * v[i])
+        })
+        .collect()
+}
+
+/// A starting point and the direction it moves in.
+type PointAndDirection<const D: usize> = ([f64; D], [f64; D]);
+
+/// The shape that answers a carrier's images: its own curve (by
+/// address), its part's target, or none.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Source {
+    Curve(usize),
+    Part(usize),
+    Nothing,
+}
+
+/// Answers each ask (key, points) with one call of `ask(first, points)`
+/// per distinct key, on the points of all the asks with that key in
+/// their order, `first` the index of the first of them; the answers split
+/// back per ask. Keys are taken in order of first appearance, so the
+/// calls are the same from run to run.
+pub(crate) fn grouped<K: std::hash::Hash + Eq, P: Copy, T>(asks: &[(K, Vec<P>)], ask: impl Fn(usize, &[P]) -> Vec<T>) -> Vec<Vec<T>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut index: HashMap<&K, usize> = HashMap::new();
+    for (i, (key, _)) in asks.iter().enumerate() {
+        let g = *index.entry(key).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(i);
+    }
+    let mut out: Vec<Vec<T>> = (0..asks.len()).map(|_| Vec::new()).collect();
+    for g in groups {
+        let points: Vec<P> = g.iter().flat_map(|&i| asks[i].1.iter().copied()).collect();
+        let mut answers = ask(g[0], &points).into_iter();
+        for &i in &g {
+            out[i] = answers.by_ref().take(asks[i].1.len()).collect();
+        }
+    }
+    out
+}
+
+/// 5-point Gauss–Legendre's places on [a, b].
+fn gl5_places(a: f64, b: f64) -> [f64; 5] {
+    GL5.map(|(xi, _)| a + xi * (b - a))
+}
+
+/// 5-point Gauss–Legendre's sum on [a, b] of the speeds at its places.
+fn gl5_piece(a: f64, b: f64, speed: &[f64]) -> f64 {
+    GL5.iter().zip(speed).map(|(&(_, w), v)| w * (b - a) * v).sum::<f64>()
+}
+
+/// The 4 pieces of [0, x] of the composite rule.
+fn quarters(x: f64) -> impl Iterator<Item = (f64, f64)> {
+    (0..4).map(move |j| (x * j as f64 / 4.0, x * (j + 1) as f64 / 4.0))
+}
+
+/// The arc length of [0, x] from the speeds at its quarters' places.
+fn arc_length(x: f64, speed: &[f64]) -> f64 {
+    quarters(x).zip(speed.chunks(5)).map(|((a, b), v)| gl5_piece(a, b, v)).sum::<f64>()
+}
+
+/// Lines fitted in lockstep on CAD: enough that a round's calls of Gmsh
+/// take thousands of points, few enough that a round's points and answers
+/// stay a few MB (all 3,045 lines of the 5,082-tet torus at once took
+/// 45 MB more at p = 2).
+const LOCKSTEP: usize = 256;
+
+/// Newton's steps at most on one node's arc length.
+const ARC_STEPS: usize = 30;
+
+/// One node's walk to its place at equal arc length
+/// ([`RefineBoundary::arc_places`]): Newton on the arc length, kept
+/// inside [0, 1]; the length at x is the start's and the short stretch
+/// from s to x (one piece: a quarter of the images a whole new length
+/// would take).
+struct ArcWalk {
+    s: f64,
+    goal: f64,
+    before: f64,
+    x: f64,
+    at: f64,
+    speed: f64,
+    steps: usize,
+}
+
+impl ArcWalk {
+    /// From the speeds at the quarters' places of [0, 1] (`whole`), and of
+    /// [0, s] then at s (`own`).
+    fn new(s: f64, whole: &[f64], own: &[f64]) -> Self {
+        let before = arc_length(s, &own[..20]);
+        ArcWalk { s, goal: s * arc_length(1.0, whole), before, x: s, at: before, speed: own[20], steps: 0 }
+    }
+
+    /// A Newton step; the places where the speeds are asked next (the
+    /// stretch to x and x), or None when done.
+    fn step(&mut self) -> Option<Vec<f64>> {
+        if self.steps == ARC_STEPS {
+            return None;
+        }
+        let step = (self.at - self.goal) / self.speed.max(f64::MIN_POSITIVE);
+        self.x = (self.x - step).clamp(0.0, 1.0);
+        if step.abs() < 1e-14 {
+            return None;
+        }
+        self.steps += 1;
+        let mut xs = gl5_places(self.s, self.x).to_vec();
+        xs.push(self.x);
+        Some(xs)
+    }
+
+    /// The speeds at the places [`Self::step`] asked.
+    fn answer(&mut self, v: &[f64]) {
+        self.at = self.before + gl5_piece(self.s, self.x, &v[..5]);
+        self.speed = v[5];
+    }
+}
+
 /// A line of new nodes on a carrier ([`RefineBoundary::fitted_lines`]):
 /// the carrier, the direction along it, and the other coordinate's bits.
 type LineKey = (usize, usize, u64);
@@ -1260,58 +1387,89 @@ impl<const D: usize> RefineBoundary<D> {
 
     /// The `k`-th coordinate of [`Self::arc_parameter`].
     fn arc_place(&self, c: usize, s: [f64; 2], k: usize) -> f64 {
-        // the speeds |d/dx Γ_1| at places x along direction k through s,
-        // all asked at once (a CAD shape answers them in one batch): where
-        // the shape knows its foot's derivative (CAD) from it, one image
-        // per place (the stencil's speed but for its rounding, about 1e-12
-        // of it), else by [`Self::precise_tangents`], four
-        // (on the 5,082-tet torus at p = 2 the fit's projections fell from
-        // 900k to 456k, its time from 6.4 s to 2.0 s with the batches)
-        let speeds = |xs: &[f64]| -> Vec<f64> {
-            let at: Vec<[f64; 2]> = xs
-                .iter()
-                .map(|&x| {
-                    let mut q = s;
-                    q[k] = x;
-                    q
+        self.arc_places(&[(c, s, k)])[0]
+    }
+
+    /// [`Self::arc_place`] of each of `asks` (carrier, parameters,
+    /// direction), each walk's arithmetic the same as alone, their speeds
+    /// asked together each round ([`Self::speeds`]: on CAD one batch per
+    /// shape and round, not per node and Newton step).
+    fn arc_places(&self, asks: &[(usize, [f64; 2], usize)]) -> Vec<f64> {
+        // the lengths at 1 (once per line: the same speeds for each of
+        // its nodes) and at s, and the speed at s, in one batch
+        let mut lines: HashMap<LineKey, usize> = HashMap::new();
+        let mut first: Vec<(usize, [f64; 2], usize, Vec<f64>)> = Vec::with_capacity(2 * asks.len());
+        let whole: Vec<usize> = asks
+            .iter()
+            .map(|&(c, s, k)| {
+                *lines.entry(line_key(c, s, k)).or_insert_with(|| {
+                    first.push((c, s, k, quarters(1.0).flat_map(|(a, b)| gl5_places(a, b)).collect()));
+                    first.len() - 1
                 })
-                .collect();
-            let exact = self.image_speeds(c, &at, k);
-            let rest: Vec<[f64; 2]> = at.iter().zip(&exact).filter(|(_, v)| v.is_none()).map(|(&q, _)| q).collect();
-            let mut numeric = self.precise_tangents(c, &rest, k).into_iter();
-            exact.into_iter().map(|v| norm(v.or_else(|| numeric.next()).unwrap_or([f64::NAN; D]))).collect()
-        };
-        // 5-point Gauss–Legendre on [a, b]: its places, and its sum of
-        // the speeds there
-        let places = |a: f64, b: f64| GL5.map(|(xi, _)| a + xi * (b - a));
-        let piece = |a: f64, b: f64, speed: &[f64]| GL5.iter().zip(speed).map(|(&(_, w), v)| w * (b - a) * v).sum::<f64>();
-        // composite on 4 pieces of [0, x]
-        let quarters = |x: f64| (0..4).map(move |j| (x * j as f64 / 4.0, x * (j + 1) as f64 / 4.0));
-        let length = |x: f64, speed: &[f64]| quarters(x).zip(speed.chunks(5)).map(|((a, b), v)| piece(a, b, v)).sum::<f64>();
-        // the lengths at 1 and at s, and the speed at s, in one batch
-        let mut xs: Vec<f64> = quarters(1.0).chain(quarters(s[k])).flat_map(|(a, b)| places(a, b)).collect();
-        xs.push(s[k]);
-        let first = speeds(&xs);
-        let goal = s[k] * length(1.0, &first[..20]);
-        // Newton on the arc length, kept inside [0, 1]; the length at x
-        // is the start's and the short stretch from s to x (one piece:
-        // a quarter of the images a whole new length would take)
-        let before = length(s[k], &first[20..40]);
-        let (mut x, mut at, mut speed) = (s[k], before, first[40]);
-        for _ in 0..30 {
-            let step = (at - goal) / speed.max(f64::MIN_POSITIVE);
-            x = (x - step).clamp(0.0, 1.0);
-            if step.abs() < 1e-14 {
-                break;
+            })
+            .collect();
+        let own = first.len();
+        first.extend(asks.iter().map(|&(c, s, k)| {
+            let mut xs: Vec<f64> = quarters(s[k]).flat_map(|(a, b)| gl5_places(a, b)).collect();
+            xs.push(s[k]);
+            (c, s, k, xs)
+        }));
+        let v = self.speeds(&first);
+        let mut walks: Vec<(usize, ArcWalk)> = (0..asks.len()).map(|i| (i, ArcWalk::new(asks[i].1[asks[i].2], &v[whole[i]], &v[own + i]))).collect();
+        let mut out = vec![0.0; asks.len()];
+        // each walk takes at most ARC_STEPS rounds
+        while !walks.is_empty() {
+            let mut asked = Vec::with_capacity(walks.len());
+            let mut going = Vec::with_capacity(walks.len());
+            for (i, mut walk) in walks {
+                match walk.step() {
+                    Some(xs) => {
+                        let (c, s, k) = asks[i];
+                        asked.push((c, s, k, xs));
+                        going.push((i, walk));
+                    }
+                    None => out[i] = walk.x,
+                }
             }
-            // the stretch to x and the speed at x, in one batch
-            let mut xs = places(s[k], x).to_vec();
-            xs.push(x);
-            let v = speeds(&xs);
-            at = before + piece(s[k], x, &v[..5]);
-            speed = v[5];
+            for ((_, walk), v) in going.iter_mut().zip(self.speeds(&asked)) {
+                walk.answer(&v);
+            }
+            walks = going;
         }
-        x
+        out
+    }
+
+    /// The speeds |d/dx Γ_1| at places x along direction k through s, for
+    /// each ask (carrier, s, k, places), all asked at once (a CAD shape
+    /// answers them in one batch): where the shape knows its foot's
+    /// derivative (CAD) from it, one image per place (the stencil's speed
+    /// but for its rounding, about 1e-12 of it), else by
+    /// [`Self::precise_tangents`], four (on the 5,082-tet torus at p = 2
+    /// the fit's projections fell from 900k to 456k, its time from 6.4 s
+    /// to 2.0 s with the batches).
+    fn speeds(&self, asks: &[(usize, [f64; 2], usize, Vec<f64>)]) -> Vec<Vec<f64>> {
+        let at: Vec<Vec<[f64; 2]>> = asks
+            .iter()
+            .map(|(_, s, k, xs)| {
+                xs.iter()
+                    .map(|&x| {
+                        let mut q = *s;
+                        q[*k] = x;
+                        q
+                    })
+                    .collect()
+            })
+            .collect();
+        let exact = self.image_speeds_many(&asks.iter().zip(&at).map(|(&(c, _, k, _), at)| (c, at.clone(), k)).collect::<Vec<_>>());
+        asks.iter()
+            .zip(at)
+            .zip(exact)
+            .map(|((&(c, _, k, _), at), exact)| {
+                let rest: Vec<[f64; 2]> = at.iter().zip(&exact).filter(|(_, v)| v.is_none()).map(|(&q, _)| q).collect();
+                let mut numeric = self.precise_tangents(c, &rest, k).into_iter();
+                exact.into_iter().map(|v| norm(v.or_else(|| numeric.next()).unwrap_or([f64::NAN; D]))).collect()
+            })
+            .collect()
     }
 
     /// The fitted places ([`Settle::Fit`]) of every line of new nodes of
@@ -1333,12 +1491,18 @@ impl<const D: usize> RefineBoundary<D> {
                 }
             }
         }
-        let lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
+        let mut lines: Vec<(LineKey, Vec<f64>)> = lines.into_iter().collect();
+        // in a fixed order: a CAD shape's answers may depend on the order
+        // of its queries by round-off ([`crate::geometry::cad`])
+        lines.sort_by_key(|l| l.0);
+        for (_, reference) in &mut lines {
+            reference.sort_by(f64::total_cmp);
+        }
         let count = lines.len();
-        // each line's fit is independent of the others and of their order;
-        // on CAD from one thread ([`ClosestPoint::serial`])
-        let fit = |(key, places): (LineKey, Vec<f64>)| (key, self.fit_line(key, places));
-        let fits: Fits = if self.serial() { lines.into_iter().map(fit).collect() } else { lines.into_par_iter().map(fit).collect() };
+        // each line's fit is independent of the others and of their
+        // order; on CAD ([`ClosestPoint::serial`]) all the lines in
+        // lockstep from one thread, each shape asked once per round
+        let fits: Fits = if self.serial() { lines.chunks(LOCKSTEP).flat_map(|chunk| self.fit_lines(chunk.to_vec())).collect() } else { lines.into_par_iter().flat_map_iter(|line| self.fit_lines(vec![line])).collect() };
         tracing::info!("settling: {count} lines of new nodes fitted in {:.2} s", t0.elapsed().as_secs_f64());
         fits
     }
@@ -1349,28 +1513,62 @@ impl<const D: usize> RefineBoundary<D> {
         self.parts.iter().any(BoundaryPart::serial) || self.carriers.iter().any(|c| c.curve.as_ref().is_some_and(|s| s.serial()))
     }
 
-    /// One line's fit, from its nodes' reference places (inner nodes of
-    /// the line, any order): equal arc length where the fit gains nothing.
-    fn fit_line(&self, (c, d, other): LineKey, mut reference: Vec<f64>) -> Line {
-        reference.sort_by(f64::total_cmp);
-        let base = |x: f64| {
+    /// The lines' fits, from each line's inner nodes' reference places
+    /// (increasing): equal arc length where the fit gains nothing.
+    fn fit_lines(&self, lines: Vec<(LineKey, Vec<f64>)>) -> Vec<(LineKey, Line)> {
+        let base = |&(_, d, other): &LineKey, x: f64| {
             let mut q = [0.0; 2];
             q[d] = x;
             q[1 - d] = f64::from_bits(other);
             q
         };
-        let start: Vec<f64> = reference.iter().map(|&r| self.arc_place(c, base(r), d)).collect();
-        let car = &self.carriers[c];
-        let shape = car.curve.clone().or_else(|| match &self.parts[car.part?].kind {
-            PartKind::Move { target, .. } => Some(target.clone()),
-            _ => None,
-        });
-        let fitted = shape.and_then(|shape| {
-            let ends: Vec<f64> = std::iter::once(0.0).chain(reference.iter().copied()).chain(std::iter::once(1.0)).collect();
-            let curve = |xs: &[f64]| self.carrier_points(c, &xs.iter().map(|&x| base(x)).collect::<Vec<_>>(), 1.0);
-            crate::geometry::fit::fitted_places(curve, |qs: &[[f64; D]]| shape.closest_points(qs), &ends, &start)
-        });
-        Line { reference, places: fitted.unwrap_or_else(|| start.clone()), arcs: start }
+        let asks: Vec<(usize, [f64; 2], usize)> = lines.iter().flat_map(|(key, reference)| reference.iter().map(move |&r| (key.0, base(key, r), key.1))).collect();
+        let mut arcs = self.arc_places(&asks).into_iter();
+        let starts: Vec<Vec<f64>> = lines.iter().map(|(_, reference)| arcs.by_ref().take(reference.len()).collect()).collect();
+        // the lines with a shape to fit to, and that shape
+        let shape = |c: usize| {
+            let car = &self.carriers[c];
+            car.curve.clone().or_else(|| match &self.parts[car.part?].kind {
+                PartKind::Move { target, .. } => Some(target.clone()),
+                _ => None,
+            })
+        };
+        let fitted: Vec<(usize, Arc<dyn crate::deform::BoundaryShape<D>>)> = lines.iter().enumerate().filter_map(|(i, (key, _))| Some((i, shape(key.0)?))).collect();
+        let problems: Vec<crate::geometry::fit::Line> = fitted
+            .iter()
+            .map(|&(i, _)| {
+                let reference = std::iter::once(0.0).chain(lines[i].1.iter().copied()).chain(std::iter::once(1.0)).collect();
+                crate::geometry::fit::Line { reference, start: starts[i].clone() }
+            })
+            .collect();
+        let curve = |asks: &[(usize, Vec<f64>)]| {
+            let at: Vec<(usize, Vec<[f64; 2]>)> = asks
+                .iter()
+                .map(|(j, xs)| {
+                    let key = &lines[fitted[*j].0].0;
+                    (key.0, xs.iter().map(|&x| base(key, x)).collect())
+                })
+                .collect();
+            self.carrier_points_many(&at)
+        };
+        let feet = |asks: &[(usize, Vec<[f64; D]>)]| {
+            let keyed: Vec<(usize, Vec<[f64; D]>)> = asks.iter().map(|(j, qs)| (Arc::as_ptr(&fitted[*j].1) as *const () as usize, qs.clone())).collect();
+            grouped(&keyed, |i, qs| fitted[asks[i].0].1.closest_points(qs))
+        };
+        let mut places = crate::geometry::fit::fitted_lines(&problems, curve, feet).into_iter();
+        let mut places: Vec<Option<Vec<f64>>> = {
+            let mut all = vec![None; lines.len()];
+            for &(i, _) in &fitted {
+                all[i] = places.next().flatten();
+            }
+            all
+        };
+        lines
+            .into_iter()
+            .zip(starts)
+            .enumerate()
+            .map(|(i, ((key, reference), start))| (key, Line { reference, places: places[i].take().unwrap_or_else(|| start.clone()), arcs: start }))
+            .collect()
     }
 
     /// The image X(p) of carrier `c`'s starting point p: on its curve, or
@@ -1383,38 +1581,69 @@ impl<const D: usize> RefineBoundary<D> {
         }
     }
 
-    /// The velocity of Γ_1 = X(P₀(s)) along s_k at each of `ss` on
-    /// carrier `c`, where its shape knows its foot's derivative
-    /// ([`crate::geometry::ClosestPoint::foot_speeds`]); else None.
-    fn image_speeds(&self, c: usize, ss: &[[f64; 2]], k: usize) -> Vec<Option<[f64; D]>> {
+    /// The velocity of Γ_1 = X(P₀(s)) along s_k at each of the parameters
+    /// of each ask (carrier, parameters, k), where its shape knows its
+    /// foot's derivative ([`crate::geometry::ClosestPoint::foot_speeds`]);
+    /// else None. Each shape is asked once for all its asks.
+    fn image_speeds_many(&self, asks: &[(usize, Vec<[f64; 2]>, usize)]) -> Vec<Vec<Option<[f64; D]>>> {
+        let pairs: Vec<(Source, Vec<PointAndDirection<D>>)> = asks
+            .iter()
+            .map(|(c, ss, k)| {
+                let car = &self.carriers[*c];
+                (self.source(*c), ss.iter().map(|&s| (car.start(s), car.start_along(s, *k))).collect())
+            })
+            .collect();
+        grouped(&pairs, |i, pd| {
+            let (p0, dirs): (Vec<[f64; D]>, Vec<[f64; D]>) = pd.iter().copied().unzip();
+            self.speeds_of(asks[i].0, &p0, &dirs)
+        })
+    }
+
+    /// The velocities of carrier `c`'s images at starting points `p0` as
+    /// they move by `dirs`, where its shape knows them.
+    fn speeds_of(&self, c: usize, p0: &[[f64; D]], dirs: &[[f64; D]]) -> Vec<Option<[f64; D]>> {
         let car = &self.carriers[c];
-        let p0: Vec<[f64; D]> = ss.iter().map(|&s| car.start(s)).collect();
-        let dirs: Vec<[f64; D]> = ss.iter().map(|&s| car.start_along(s, k)).collect();
         match (&car.curve, car.part) {
-            (Some(curve), _) => curve.foot_speeds(&p0, &dirs),
-            (None, Some(part)) => self.parts[part].image_speeds(&p0, &dirs),
-            (None, None) => vec![None; ss.len()],
+            (Some(curve), _) => curve.foot_speeds(p0, dirs),
+            (None, Some(part)) => self.parts[part].image_speeds(p0, dirs),
+            (None, None) => vec![None; p0.len()],
         }
+    }
+
+    /// Which shape answers carrier `c`'s images: carriers of one source
+    /// can be asked together.
+    fn source(&self, c: usize) -> Source {
+        let car = &self.carriers[c];
+        match (&car.curve, car.part) {
+            (Some(curve), _) => Source::Curve(Arc::as_ptr(curve) as *const () as usize),
+            (None, Some(part)) => Source::Part(part),
+            (None, None) => Source::Nothing,
+        }
+    }
+
+    /// The images X(p0) of carrier `c`'s starting points, where it has.
+    fn images_of(&self, c: usize, p0: &[[f64; D]]) -> Vec<Option<[f64; D]>> {
+        let car = &self.carriers[c];
+        match (&car.curve, car.part) {
+            (Some(curve), _) => curve.closest_points(p0).into_iter().map(Some).collect(),
+            (None, Some(k)) => self.parts[k].images(p0),
+            (None, None) => vec![None; p0.len()],
+        }
+    }
+
+    /// [`Self::carrier_points`] at t = 1 of each ask (carrier,
+    /// parameters), each shape asked once for all its asks.
+    fn carrier_points_many(&self, asks: &[(usize, Vec<[f64; 2]>)]) -> Vec<Vec<[f64; D]>> {
+        let p0: Vec<(Source, Vec<[f64; D]>)> = asks.iter().map(|(c, ss)| (self.source(*c), ss.iter().map(|&s| self.carriers[*c].start(s)).collect())).collect();
+        let images = grouped(&p0, |i, ps| self.images_of(asks[i].0, ps));
+        p0.iter().zip(images).map(|((_, p0), images)| moved(p0, images, 1.0)).collect()
     }
 
     /// Γ_t at each of `ss` on carrier `c` ([`Self::carrier_point`]'s
     /// points), the images asked together.
     fn carrier_points(&self, c: usize, ss: &[[f64; 2]], t: f64) -> Vec<[f64; D]> {
-        let car = &self.carriers[c];
-        let p0: Vec<[f64; D]> = ss.iter().map(|&s| car.start(s)).collect();
-        let images = match (&car.curve, car.part) {
-            (Some(curve), _) => curve.closest_points(&p0).into_iter().map(Some).collect(),
-            (None, Some(k)) => self.parts[k].images(&p0),
-            (None, None) => vec![None; p0.len()],
-        };
-        p0.iter()
-            .zip(images)
-            .map(|(&p0, x)| {
-                let x = x.unwrap_or(p0);
-                let v: [f64; D] = std::array::from_fn(|i| x[i] - p0[i]);
-                std::array::from_fn(|i| p0[i] + t * v[i])
-            })
-            .collect()
+        let p0: Vec<[f64; D]> = ss.iter().map(|&s| self.carriers[c].start(s)).collect();
+        moved(&p0, self.images_of(c, &p0), t)
     }
 
     /// Γ_t(s) of a carrier and its velocity X(P₀(s)) − P₀(s).
@@ -1855,6 +2084,20 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Q1Mesh<D, N> for RefineMes
 mod tests {
     use super::*;
     use crate::mesh::QuadMesh;
+
+    /// Asks with one key are answered by one call, in their order, and
+    /// the answers go back to their own asks.
+    #[test]
+    fn grouped_asks_each_key_once_and_splits_the_answers_back() {
+        let asks: Vec<(char, Vec<u32>)> = vec![('a', vec![1, 2]), ('b', vec![3]), ('a', vec![4]), ('c', vec![]), ('b', vec![5, 6])];
+        let calls = std::cell::RefCell::new(Vec::new());
+        let out = grouped(&asks, |first, ps| {
+            calls.borrow_mut().push((first, ps.to_vec()));
+            ps.iter().map(|p| p * 10).collect()
+        });
+        assert_eq!(out, vec![vec![10, 20], vec![30], vec![40], vec![], vec![50, 60]]);
+        assert_eq!(calls.into_inner(), vec![(0, vec![1, 2, 4]), (1, vec![3, 5, 6]), (3, vec![])]);
+    }
 
     #[test]
     fn quad_subdivision_shares_nodes_and_counts_match() {

@@ -47,81 +47,228 @@ const ITERATIONS: usize = 12;
 /// improve on `start` (a straight line, a flat curve, a step that would
 /// let the nodes cross): then `start` stands.
 pub fn fitted_places<const D: usize>(curve: impl Fn(&[f64]) -> Vec<[f64; D]>, feet: impl Fn(&[[f64; D]]) -> Vec<[f64; D]>, reference: &[f64], start: &[f64]) -> Option<Vec<f64>> {
-    let m = start.len();
-    debug_assert_eq!(reference.len(), m + 2);
-    let basis = Interpolant::new(reference);
-    let ends: [[f64; D]; 2] = curve(&[0.0, 1.0]).try_into().ok()?;
-    let scale = dist2(ends[0], ends[1]).sqrt();
-    let residual = |x: &[f64]| -> Option<Vec<f64>> {
-        let mut nodes = Vec::with_capacity(m + 2);
-        nodes.push(ends[0]);
-        nodes.extend(curve(x));
-        nodes.push(ends[1]);
-        let qs: Vec<[f64; D]> = basis.samples.iter().map(|w| std::array::from_fn(|i| w.iter().zip(&nodes).map(|(w, n)| w * n[i]).sum())).collect();
-        let r: Vec<f64> = qs.iter().zip(feet(&qs)).flat_map(|(&q, f)| sub(q, f)).collect();
-        r.iter().all(|v| v.is_finite()).then_some(r)
-    };
-    let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-    let mut x = start.to_vec();
-    let mut r = residual(&x)?;
-    let first = norm2(&r);
-    // a straight or already fitting line: nothing to gain
-    if first <= (1e-13 * scale).powi(2) {
-        return None;
+    let lines = [Line { reference: reference.to_vec(), start: start.to_vec() }];
+    let each = |asks: &[(usize, Vec<f64>)]| asks.iter().map(|(_, xs)| curve(xs)).collect();
+    let feet_each = |asks: &[(usize, Vec<[f64; D]>)]| asks.iter().map(|(_, qs)| feet(qs)).collect();
+    fitted_lines(&lines, each, feet_each).pop().flatten()
+}
+
+/// One line to fit ([`fitted_lines`]): its nodes' reference places, ends
+/// included, and its inner nodes' parameters to start from.
+#[derive(Clone, Debug)]
+pub struct Line {
+    pub reference: Vec<f64>,
+    pub start: Vec<f64>,
+}
+
+/// [`fitted_places`] of many lines at once, each line's arithmetic the
+/// same as alone: every round asks the curve points of all the lines'
+/// trial places in one call of `curve`, then the feet of all their
+/// samples in one call of `feet`, each ask tagged by its line's index in
+/// `lines` (the caller asks each shape once for all its lines: on CAD one
+/// batch of Gmsh's calls per shape and round, not per line and
+/// residual; on the 5,082-tet torus at p = 2 a line alone asked the
+/// shape 140 times).
+pub fn fitted_lines<const D: usize>(lines: &[Line], curve: impl Fn(&[(usize, Vec<f64>)]) -> Vec<Vec<[f64; D]>>, feet: impl Fn(&[(usize, Vec<[f64; D]>)]) -> Vec<Vec<[f64; D]>>) -> Vec<Option<Vec<f64>>> {
+    let mut out: Vec<Option<Vec<f64>>> = vec![None; lines.len()];
+    let ends = curve(&(0..lines.len()).map(|i| (i, vec![0.0, 1.0])).collect::<Vec<_>>());
+    let mut fits: Vec<(usize, LineFit<D>, Vec<Vec<f64>>)> = Vec::new();
+    for (i, (line, ends)) in lines.iter().zip(ends).enumerate() {
+        debug_assert_eq!(line.reference.len(), line.start.len() + 2);
+        let Ok(ends) = <[[f64; D]; 2]>::try_from(ends) else { continue };
+        let fit = LineFit::new(&line.reference, ends, &line.start);
+        let first = vec![line.start.clone()];
+        fits.push((i, fit, first));
     }
-    // the nodes stay in order, each gap at least a fifth of where it began
-    let gaps: Vec<f64> = (0..=m).map(|j| 0.2 * (at(&x, j + 1) - at(&x, j))).collect();
-    let ordered = |x: &[f64]| (0..=m).all(|j| at(x, j + 1) - at(x, j) >= gaps[j]);
-    let mut damping = 1e-6;
-    for _ in 0..ITERATIONS {
-        let jac = jacobian(&residual, &x, &r)?;
-        // the normal equations (JᵀJ + λ diag JᵀJ) δ = −Jᵀr, m ≤ a few
-        let mut a = vec![vec![0.0; m]; m];
-        let mut g = vec![0.0; m];
-        for j in 0..m {
-            g[j] = -jac[j].iter().zip(&r).map(|(a, b)| a * b).sum::<f64>();
-            for k in 0..m {
-                a[j][k] = jac[j].iter().zip(&jac[k]).map(|(a, b)| a * b).sum();
+    // every line's asks are bounded (ITERATIONS, the damping's range):
+    // so are the rounds
+    while !fits.is_empty() {
+        let asks: Vec<(usize, Vec<f64>)> = fits.iter().enumerate().flat_map(|(f, (_, _, xs))| xs.iter().map(move |x| (f, x.clone()))).collect();
+        let points = curve(&asks.iter().map(|(f, x)| (fits[*f].0, x.clone())).collect::<Vec<_>>());
+        let samples: Vec<(usize, Vec<[f64; D]>)> = asks.iter().zip(&points).map(|((f, _), p)| (fits[*f].0, fits[*f].1.samples(p))).collect();
+        let feet = feet(&samples);
+        let mut residuals = samples.iter().zip(feet).map(|((_, qs), fs)| offsets(qs, &fs));
+        let mut next = Vec::with_capacity(fits.len());
+        for (i, mut fit, xs) in fits {
+            let rs: Vec<Option<Vec<f64>>> = residuals.by_ref().take(xs.len()).collect();
+            match fit.answer(rs) {
+                Turn::Ask(xs) => next.push((i, fit, xs)),
+                Turn::Done(places) => out[i] = places,
             }
         }
-        let mut improved = false;
-        while damping < 1e6 {
-            let mut damped = a.clone();
-            for j in 0..m {
-                damped[j][j] *= 1.0 + damping;
+        fits = next;
+    }
+    out
+}
+
+/// The offsets q − foot(q) of the samples, flat; None unless all finite.
+fn offsets<const D: usize>(qs: &[[f64; D]], feet: &[[f64; D]]) -> Option<Vec<f64>> {
+    let r: Vec<f64> = qs.iter().zip(feet).flat_map(|(&q, &f)| sub(q, f)).collect();
+    (r.len() == D * qs.len() && r.iter().all(|v| v.is_finite())).then_some(r)
+}
+
+/// What a line's fit wants next: the offsets at these inner places, or
+/// nothing more (its places, or None where `start` stands).
+enum Turn {
+    Ask(Vec<Vec<f64>>),
+    Done(Option<Vec<f64>>),
+}
+
+/// What a line's fit waits for: the offsets at its start, at the
+/// Jacobian's stencil around its iterate, or at a trial step.
+enum Wait {
+    Start,
+    Jacobian,
+    /// The trial places and the step that led there.
+    Trial(Vec<f64>, Vec<f64>),
+}
+
+/// One line's Gauss–Newton fit with Levenberg's damping, as a machine
+/// that asks for offsets ([`Turn::Ask`]) and is answered
+/// ([`LineFit::answer`]), so that many lines share their shapes' calls.
+struct LineFit<const D: usize> {
+    basis: Interpolant,
+    ends: [[f64; D]; 2],
+    scale: f64,
+    x: Vec<f64>,
+    r: Vec<f64>,
+    /// |r|² at the start: the fit returns only what beats it.
+    first: f64,
+    /// Each gap's least width: a fifth of where it began.
+    gaps: Vec<f64>,
+    damping: f64,
+    iteration: usize,
+    /// The normal equations JᵀJ and −Jᵀr at the iterate.
+    normal: (Vec<Vec<f64>>, Vec<f64>),
+    wait: Wait,
+}
+
+impl<const D: usize> LineFit<D> {
+    fn new(reference: &[f64], ends: [[f64; D]; 2], start: &[f64]) -> Self {
+        let scale = dist2(ends[0], ends[1]).sqrt();
+        LineFit { basis: Interpolant::new(reference), ends, scale, x: start.to_vec(), r: Vec::new(), first: 0.0, gaps: Vec::new(), damping: 1e-6, iteration: 0, normal: (Vec::new(), Vec::new()), wait: Wait::Start }
+    }
+
+    /// The interpolant's samples, from the inner nodes' curve points.
+    fn samples(&self, inner: &[[f64; D]]) -> Vec<[f64; D]> {
+        let mut nodes = Vec::with_capacity(inner.len() + 2);
+        nodes.push(self.ends[0]);
+        nodes.extend_from_slice(inner);
+        nodes.push(self.ends[1]);
+        self.basis.samples.iter().map(|w| std::array::from_fn(|i| w.iter().zip(&nodes).map(|(w, n)| w * n[i]).sum())).collect()
+    }
+
+    /// The next turn, given the offsets at the places last asked.
+    fn answer(&mut self, mut rs: Vec<Option<Vec<f64>>>) -> Turn {
+        match std::mem::replace(&mut self.wait, Wait::Start) {
+            Wait::Start => {
+                let Some(r) = rs.pop().flatten() else { return Turn::Done(None) };
+                self.first = norm2(&r);
+                self.r = r;
+                // a straight or already fitting line: nothing to gain
+                if self.first <= (1e-13 * self.scale).powi(2) {
+                    return Turn::Done(None);
+                }
+                // the nodes stay in order, each gap at least a fifth of
+                // where it began
+                self.gaps = (0..=self.x.len()).map(|j| 0.2 * (at(&self.x, j + 1) - at(&self.x, j))).collect();
+                self.ask_jacobian()
             }
-            let Some(step) = solve(damped, g.clone()) else { break };
-            // a step this short that does not lower the offsets is at
-            // their round-off: converged (damping it further only costs
-            // evaluations, a dozen per line measured)
-            if step.iter().all(|s| s.abs() < 1e-12) {
-                return (norm2(&r) < first).then_some(x);
+            Wait::Jacobian => {
+                // ∂r/∂x_j by forward differences, one column per inner node
+                let Some(jac) = rs.into_iter().map(|ry| Some(ry?.iter().zip(&self.r).map(|(a, b)| (a - b) / H).collect::<Vec<f64>>())).collect::<Option<Vec<Vec<f64>>>>() else { return Turn::Done(None) };
+                // the normal equations (JᵀJ + λ diag JᵀJ) δ = −Jᵀr, m ≤ a few
+                let m = self.x.len();
+                let mut a = vec![vec![0.0; m]; m];
+                let mut g = vec![0.0; m];
+                for j in 0..m {
+                    g[j] = -jac[j].iter().zip(&self.r).map(|(a, b)| a * b).sum::<f64>();
+                    for k in 0..m {
+                        a[j][k] = jac[j].iter().zip(&jac[k]).map(|(a, b)| a * b).sum();
+                    }
+                }
+                self.normal = (a, g);
+                self.try_step()
             }
-            let next: Vec<f64> = x.iter().zip(&step).map(|(x, s)| x + s).collect();
-            if let Some(rn) = ordered(&next).then(|| residual(&next)).flatten() {
-                if norm2(&rn) < norm2(&r) {
+            Wait::Trial(next, step) => match rs.pop().flatten() {
+                Some(rn) if norm2(&rn) < norm2(&self.r) => {
                     // a step under 1e-9 of the line moves a node by less
                     // than the shapes' own tolerance: converged (to 1e-13
                     // it took twice the projections, on CAD the most of a
                     // snap's time: 0.63 s of 3.2 s on a 5,062-tet ball in a
                     // box at p = 3)
                     let small = step.iter().all(|s| s.abs() < FIT_STEP);
-                    (x, r, improved) = (next, rn, true);
-                    damping = (damping * 0.1).max(1e-9);
+                    (self.x, self.r) = (next, rn);
+                    self.damping = (self.damping * 0.1).max(1e-9);
                     if small {
-                        return Some(x);
+                        return Turn::Done(Some(std::mem::take(&mut self.x)));
                     }
-                    break;
+                    self.iteration += 1;
+                    if self.iteration == ITERATIONS {
+                        return self.stop();
+                    }
+                    self.ask_jacobian()
                 }
-            }
-            damping *= 10.0;
-        }
-        if !improved {
-            break;
+                _ => {
+                    self.damping *= 10.0;
+                    self.try_step()
+                }
+            },
         }
     }
-    (norm2(&r) < first).then_some(x)
+
+    /// Asks the offsets at the Jacobian's stencil around the iterate.
+    fn ask_jacobian(&mut self) -> Turn {
+        self.wait = Wait::Jacobian;
+        Turn::Ask(
+            (0..self.x.len())
+                .map(|j| {
+                    let mut y = self.x.clone();
+                    y[j] += H;
+                    y
+                })
+                .collect(),
+        )
+    }
+
+    /// The damped step from the iterate: a trial to ask, or the end (the
+    /// step at round-off, the damping at its top, a singular system).
+    fn try_step(&mut self) -> Turn {
+        let m = self.x.len();
+        while self.damping < 1e6 {
+            let mut damped = self.normal.0.clone();
+            for j in 0..m {
+                damped[j][j] *= 1.0 + self.damping;
+            }
+            let Some(step) = solve(damped, self.normal.1.clone()) else { break };
+            // a step this short that does not lower the offsets is at
+            // their round-off: converged (damping it further only costs
+            // evaluations, a dozen per line measured)
+            if step.iter().all(|s| s.abs() < 1e-12) {
+                return self.stop();
+            }
+            let next: Vec<f64> = self.x.iter().zip(&step).map(|(x, s)| x + s).collect();
+            if (0..=m).all(|j| at(&next, j + 1) - at(&next, j) >= self.gaps[j]) {
+                self.wait = Wait::Trial(next.clone(), step);
+                return Turn::Ask(vec![next]);
+            }
+            self.damping *= 10.0;
+        }
+        self.stop()
+    }
+
+    /// The iterate if it beats the start, else None.
+    fn stop(&mut self) -> Turn {
+        Turn::Done((norm2(&self.r) < self.first).then(|| std::mem::take(&mut self.x)))
+    }
 }
+
+fn norm2(r: &[f64]) -> f64 {
+    r.iter().map(|v| v * v).sum::<f64>()
+}
+
+/// The forward differences' step (of places in [0, 1]).
+const H: f64 = 1e-7;
 
 /// The parameter of node `j` of the line (0 and 1 at its ends).
 fn at(x: &[f64], j: usize) -> f64 {
@@ -132,19 +279,6 @@ fn at(x: &[f64], j: usize) -> f64 {
     } else {
         x[j - 1]
     }
-}
-
-/// ∂r/∂x_j by forward differences, one column per inner node.
-fn jacobian(residual: &impl Fn(&[f64]) -> Option<Vec<f64>>, x: &[f64], r: &[f64]) -> Option<Vec<Vec<f64>>> {
-    const H: f64 = 1e-7;
-    (0..x.len())
-        .map(|j| {
-            let mut y = x.to_vec();
-            y[j] += H;
-            let ry = residual(&y)?;
-            Some(ry.iter().zip(r).map(|(a, b)| (a - b) / H).collect())
-        })
-        .collect()
 }
 
 /// Gaussian elimination with partial pivoting; None if singular.
@@ -210,6 +344,18 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
+    /// The point of the polyline `poly` closest to `q`.
+    fn polyline_foot(poly: &[[f64; 2]], q: [f64; 2]) -> [f64; 2] {
+        poly.windows(2)
+            .map(|w| {
+                let d = sub(w[1], w[0]);
+                let s = (((q[0] - w[0][0]) * d[0] + (q[1] - w[0][1]) * d[1]) / (d[0] * d[0] + d[1] * d[1])).clamp(0.0, 1.0);
+                [w[0][0] + s * d[0], w[0][1] + s * d[1]]
+            })
+            .min_by(|p, r| dist2(*p, q).total_cmp(&dist2(*r, q)))
+            .unwrap()
+    }
+
     /// An ellipse's quarter, from the end of its major axis (curvature
     /// changing 8-fold along it): the fitted places beat equal arc length
     /// more than a hundredfold (measured: 2.85e-2 against 1.26e-4),
@@ -224,16 +370,7 @@ mod tests {
             [a * t.cos(), b * t.sin()]
         };
         let poly: Vec<[f64; 2]> = (0..=20_000).map(|i| curve(i as f64 / 20_000.0)).collect();
-        let foot = |q: [f64; 2]| {
-            poly.windows(2)
-                .map(|w| {
-                    let d = sub(w[1], w[0]);
-                    let s = (((q[0] - w[0][0]) * d[0] + (q[1] - w[0][1]) * d[1]) / (d[0] * d[0] + d[1] * d[1])).clamp(0.0, 1.0);
-                    [w[0][0] + s * d[0], w[0][1] + s * d[1]]
-                })
-                .min_by(|p, r| dist2(*p, q).total_cmp(&dist2(*r, q)))
-                .unwrap()
-        };
+        let foot = |q: [f64; 2]| polyline_foot(&poly, q);
         // equal arc length, from the polyline's lengths
         let lengths: Vec<f64> = std::iter::once(0.0).chain(poly.windows(2).scan(0.0, |s, w| Some(*s + dist2(w[0], w[1]).sqrt()).inspect(|v| *s = *v))).collect();
         let total = *lengths.last().unwrap();
@@ -242,6 +379,64 @@ mod tests {
         let fitted = fitted_places(|xs: &[f64]| xs.iter().map(|&x| curve(x)).collect(), |qs: &[[f64; 2]]| qs.iter().map(|&q| foot(q)).collect(), &[0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0], &start).expect("a curved line is fitted");
         let (before, after) = (error(&curve, &foot, &start), error(&curve, &foot, &fitted));
         assert!(before > 2.5e-2 && after < 2e-4, "equal arc length {before:.3e}, fitted {after:.3e}");
+    }
+
+    /// Lines fitted together in lockstep end exactly where each ends
+    /// alone (bit for bit), and a shape is asked once per round for all
+    /// of them: the answers are not mixed up between the lines.
+    #[test]
+    fn lines_in_lockstep_end_where_each_ends_alone() {
+        // three ellipse arcs, each its own shape (its exact foot found by
+        // a fine polyline), at p = 3 and p = 2
+        let arcs: [(f64, f64, f64, f64); 3] = [(2.0, 1.0, 0.0, 0.5), (3.0, 1.0, 0.3, 0.4), (1.5, 1.0, 0.9, 0.6)];
+        let curve = |l: usize, x: f64| {
+            let (a, b, t0, span) = arcs[l];
+            let t = (t0 + x * span) * std::f64::consts::FRAC_PI_2;
+            [a * t.cos(), b * t.sin()]
+        };
+        let polys: Vec<Vec<[f64; 2]>> = (0..3).map(|l| (-2000..=12_000).map(|i| curve(l, i as f64 / 10_000.0)).collect()).collect();
+        let foot = |l: usize, q: [f64; 2]| polyline_foot(&polys[l], q);
+        let lines = [
+            Line { reference: vec![0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0], start: vec![0.3, 0.6] },
+            Line { reference: vec![0.0, 0.5, 1.0], start: vec![0.45] },
+            Line { reference: vec![0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0], start: vec![0.35, 0.7] },
+        ];
+        // each alone (`fitted_places`): its places and how many residuals
+        // it asked
+        let asked = std::cell::Cell::new(0);
+        let alone: Vec<(Option<Vec<f64>>, usize)> = (0..3)
+            .map(|l| {
+                asked.set(0);
+                let feet = |qs: &[[f64; 2]]| {
+                    asked.set(asked.get() + 1);
+                    qs.iter().map(|&q| foot(l, q)).collect()
+                };
+                let places = fitted_places(|xs: &[f64]| xs.iter().map(|&x| curve(l, x)).collect(), feet, &lines[l].reference, &lines[l].start);
+                (places, asked.get())
+            })
+            .collect();
+        // the lines in lockstep, or each alone: one call of `feet` per round
+        let rounds = |lines: &[Line], first: usize| {
+            let calls = std::cell::Cell::new(0);
+            let places = fitted_lines(
+                lines,
+                |asks: &[(usize, Vec<f64>)]| asks.iter().map(|(l, xs)| xs.iter().map(|&x| curve(first + l, x)).collect()).collect(),
+                |asks: &[(usize, Vec<[f64; 2]>)]| {
+                    calls.set(calls.get() + 1);
+                    asks.iter().map(|(l, qs)| qs.iter().map(|&q| foot(first + l, q)).collect()).collect()
+                },
+            );
+            (places, calls.get())
+        };
+        let (together, all) = rounds(&lines, 0);
+        assert!(alone.iter().all(|(p, _)| p.is_some()), "{alone:?}");
+        assert_eq!(together, alone.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>());
+        // as many rounds as the slowest line alone, far fewer calls than
+        // the residuals asked one by one
+        let each: Vec<usize> = (0..3).map(|l| rounds(&lines[l..l + 1], l).1).collect();
+        assert_eq!(all, *each.iter().max().unwrap(), "rounds alone {each:?}");
+        let residuals: usize = alone.iter().map(|a| a.1).sum();
+        assert!(3 * all < residuals, "{all} rounds, {residuals} residuals alone");
     }
 
     /// A straight line has nothing to fit: its places stand.

@@ -33,7 +33,7 @@ mod gmsh;
 pub mod live;
 
 use super::ClosestPoint;
-use crate::numeric::{cross3, dist2, dot, mix, norm, sub, unit};
+use crate::numeric::{cross3, dist2, dot, mix, sub, unit};
 use std::collections::HashMap;
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
@@ -313,15 +313,18 @@ struct Frame {
 /// parameters.
 type Answer = ([f64; 3], [f64; 3], [f64; 2]);
 
+/// |a|. Not [`crate::numeric::norm`]'s `hypot`: its care for overflow
+/// (components beyond 1e154, no model's) cost 6 % of a CAD run, in the
+/// projections' Newton steps.
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
 /// A seed cell's side, as a fraction of the entity's bounding box: a query
 /// starts from a foot found for a point this close (the feet of such
 /// points are close unless the point is near the shape's medial axis,
 /// which the nodes and samples of a mesh on the shape are not).
 const SEED_CELL: f64 = 1e-3;
-
-/// How far, in seed cells, a point of a batch with no seed around it
-/// looks for an answered point of the batch to start from.
-const BATCH_SEED: f64 = 10.0;
 
 /// The 26 cells around a seed cell, nearest first (sharing a side, then
 /// an edge, then a corner).
@@ -622,22 +625,18 @@ impl CadShape {
         let frame = known.frame_of(self, s)?;
         let cell_of = |p: &[f64; 3]| p.map(|c| (c / frame.cell).floor() as i64);
         let mut seeded: Vec<(usize, [f64; 2])> = Vec::new();
-        // a point with no seed around it starts from the nearest point of
-        // the batch already answered, if within BATCH_SEED cells (the
-        // samples of a boundary element are a few cells apart)
-        let reach = (BATCH_SEED * frame.cell).powi(2);
+        // a point with no seed around it is projected by Gmsh (which
+        // leaves a seed). Not from the nearest point of the batch already
+        // answered, as until 7 December: a batch holds the points of many
+        // lines, and a neighbour 10 cells away across a thin trailing edge
+        // led Newton's method to the foot on the other side (the
+        // three-element airfoil at p = 3: one element more not valid
+        // after the snap, and no repair)
         for (i, p) in ps.iter().enumerate() {
             if out[i].is_some() {
                 continue;
             }
-            let near = || {
-                (0..ps.len())
-                    .filter_map(|j| out[j].filter(|a| a.2.iter().all(|v| v.is_finite())).map(|a| (crate::numeric::dist2(ps[j], *p), a.2)))
-                    .filter(|&(d, _)| d <= reach)
-                    .min_by(|a, b| a.0.total_cmp(&b.0))
-                    .map(|(_, uv)| uv)
-            };
-            match seed_near(&known.seeds, cell_of(p)).or_else(near) {
+            match seed_near(&known.seeds, cell_of(p)) {
                 Some(uv) => seeded.push((i, uv)),
                 None => out[i] = Some(self.solve(s, known, *p, planar)?),
             }
@@ -675,6 +674,10 @@ impl CadShape {
         short("gmshModelGetValue", &v, 3, active.len())?;
         let mut x: Vec<[f64; 3]> = (0..ps.len()).map(|j| [v[3 * j], v[3 * j + 1], v[3 * j + 2]]).collect();
         let mut converged: Vec<usize> = Vec::new();
+        // each point's last move: where the moves fall quadratically the
+        // next would be under round-off, and the settling's step is it
+        // (none before the first: one move says nothing of the rate)
+        let mut last = vec![0.0; ps.len()];
         for _ in 0..16 {
             if active.is_empty() {
                 break;
@@ -704,9 +707,19 @@ impl CadShape {
             active.clear();
             for (j, &i) in stepped.iter().enumerate() {
                 x[i] = [v[3 * j], v[3 * j + 1], v[3 * j + 2]];
-                if moved[j] <= 1e-10 * (1.0 + norm(ps[i])) {
+                let size = 1.0 + norm(ps[i]);
+                // converged; or, where Newton's method converges
+                // quadratically, the next move under 1e-12, which the
+                // settling's step takes (it starts from the grid's point,
+                // 5e-10 of the range away, anyway): a first move under
+                // 1e-7 (a seed that close), or one under 1e-6 and a
+                // thousandth of the last (the next is move³/last²); a
+                // step of three Gmsh calls saved per projection
+                let quadratic = if last[i] == 0.0 { moved[j] <= 1e-7 * size } else { moved[j] <= 1e-6 * size && moved[j] <= 1e-3 * last[i] };
+                if moved[j] <= 1e-10 * size || quadratic {
                     converged.push(i);
                 } else {
+                    last[i] = moved[j];
                     active.push(i);
                 }
             }
