@@ -661,7 +661,10 @@ impl CadShape {
 
     /// [`Self::newton`] (with `edge` false) of each of `ps` from its
     /// parameters in `uv`, all the points' evaluations of a step in one
-    /// call of each of Gmsh's functions; the same arithmetic per point.
+    /// call of each of Gmsh's functions; the same arithmetic per point
+    /// but the end: a step sooner where the moves fall quadratically (the
+    /// settling's step, which every foot here takes, is the last one;
+    /// `newton`'s feet are not all settled, so it keeps its 1e-10).
     fn newton_all(&self, s: &gmsh::Session, ps: &[[f64; 3]], mut uv: Vec<[f64; 2]>, frame: &Frame) -> Result<Vec<Option<Foot>>, CadError> {
         let range = frame.range;
         let k = self.dim as usize;
