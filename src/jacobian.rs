@@ -425,7 +425,7 @@ pub fn lift<const D: usize>(x: [f64; D]) -> Point3 {
 }
 
 /// Cells per parallel chunk of [`normalise`].
-const NORMALISE_CHUNK: usize = 1024;
+pub const NORMALISE_CHUNK: usize = 1024;
 
 /// Computes c(t) and c'(t) on the mesh of Ω_t given by `cells` at
 /// positions `nodes`: `volume0` = |Ω₀|, `boundary` the quadrature of the
@@ -439,31 +439,46 @@ pub fn normalise<const D: usize, const N: usize>(
     volume0: f64,
     boundary: impl Iterator<Item = ([f64; D], f64)>,
 ) -> Result<Normalisation, JacobianError> {
+    normalise_with(cells, nodes, field, (t, volume0), boundary, (0.0, 0.0))
+}
+
+/// [`normalise`] over `cells` with `base` added: the sums over the other
+/// cells of Ω_t, where they are known (cells that do not move, where g
+/// does not change). `base` (0, 0) is [`normalise`].
+pub fn normalise_with<const D: usize, const N: usize>(
+    cells: &[[usize; N]],
+    nodes: &[[f64; D]],
+    field: &JacobianField,
+    (t, volume0): (f64, f64),
+    boundary: impl Iterator<Item = ([f64; D], f64)>,
+    base: (f64, f64),
+) -> Result<Normalisation, JacobianError> {
     // fixed chunks summed in order: rayon's own reduction splits where
     // work is stolen, so its sum differed from run to run in the last
     // digits, and a settling flow (water_wave_p3) magnified that to 1e-5
-    let partial = cells
-        .par_chunks(NORMALISE_CHUNK)
-        .map(|chunk| {
-            let mut acc = (0.0, 0.0);
-            for cell in chunk {
-                let p = cell.map(|n| nodes[n]);
-                for (xi, w) in cell_quadrature::<D, N>() {
-                    let (x, det, _) = q1_eval(&p, xi);
-                    let (g, gt) = field.g_checked(lift(x), t)?;
-                    acc.0 += w * det / g;
-                    acc.1 -= w * det * gt / (g * g);
-                }
-            }
-            Ok(acc)
-        })
-        .collect::<Result<Vec<(f64, f64)>, JacobianError>>()?;
-    let (inv_g, dt_term) = partial.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let partial = cells.par_chunks(NORMALISE_CHUNK).map(|chunk| chunk_sums(chunk, nodes, field, t)).collect::<Result<Vec<(f64, f64)>, JacobianError>>()?;
+    let (inv_g, dt_term) = partial.iter().fold(base, |a, b| (a.0 + b.0, a.1 + b.1));
     let mut flux = 0.0;
     for (x, vn_ds) in boundary {
         flux += vn_ds / field.g_checked(lift(x), t)?.0;
     }
     Ok(Normalisation { t, c: inv_g / volume0, c_dot: (dt_term + flux) / volume0 })
+}
+
+/// The sums of [`normalise`] over the cells of one chunk: ∫ 1/g and
+/// −∫ ∂g/∂t / g².
+pub fn chunk_sums<const D: usize, const N: usize>(chunk: &[[usize; N]], nodes: &[[f64; D]], field: &JacobianField, t: f64) -> Result<(f64, f64), JacobianError> {
+    let mut acc = (0.0, 0.0);
+    for cell in chunk {
+        let p = cell.map(|n| nodes[n]);
+        for (xi, w) in cell_quadrature::<D, N>() {
+            let (x, det, _) = q1_eval(&p, xi);
+            let (g, gt) = field.g_checked(lift(x), t)?;
+            acc.0 += w * det / g;
+            acc.1 -= w * det * gt / (g * g);
+        }
+    }
+    Ok(acc)
 }
 
 /// The boundary-flux quadrature of a linear mesh: pairs (x, v·n dS) at

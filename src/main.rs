@@ -90,7 +90,24 @@ fn out_of_memory(size: usize) -> ! {
     std::process::abort()
 }
 
+/// glibc's malloc raises its threshold for giving a block its own pages
+/// to the size of each such block freed (up to 32 MiB); after that the
+/// large arrays of a run (a patch run's per-node vectors, the writers'
+/// texts) are carved from the heap, and their pages stay with the process
+/// when they are freed. Held at 256 KiB, they go back to the system:
+/// measured on the 1e-5 extruded layer (60,596 hexes) at p = 2, the peak
+/// resident memory fell from 1,006 MB to 829 MB.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn hold_mmap_threshold() {
+    // SAFETY: mallopt only sets one of the allocator's parameters
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 256 * 1024);
+    }
+}
+
 fn main() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    hold_mmap_threshold();
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
         .with_writer(std::io::stderr)

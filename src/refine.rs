@@ -1832,6 +1832,12 @@ impl<const D: usize> BoundaryModel<D> for RefineBoundary<D> {
     fn state_mut(&mut self) -> &mut Vec<Role2> {
         &mut self.roles
     }
+
+    // a fixed role is never changed in a run (put_back changes a sliding
+    // node's parameter only)
+    fn held(&self, i: usize) -> bool {
+        matches!(self.roles[i], Role2::Fixed)
+    }
 }
 
 /// The curve two of the parts `here` (of a coarse edge with midpoint

@@ -27,7 +27,7 @@ pub mod strain;
 
 /// A target or wall shape in D dimensions (see [`crate::geometry::ClosestPoint`]).
 pub use crate::geometry::ClosestPoint as BoundaryShape;
-use crate::jacobian::{lift, normalise, JacobianError, JacobianField, Normalisation};
+use crate::jacobian::{lift, normalise, normalise_with, JacobianError, JacobianField, Normalisation};
 use crate::lsfem::{Constraint, DivCurlSystem, LsfemError};
 use crate::solve::{Amg, CholeskySolver, ConjugateGradient, FactorLimits, FallbackTally, Fallbacks, FirstSolver, Jacobi, SolveError, SpdSolver};
 use std::sync::Arc;
@@ -234,6 +234,13 @@ pub trait BoundaryModel<const D: usize>: Send + Sync {
     fn state(&self) -> &Self::State;
     /// Replaces the per-node state.
     fn state_mut(&mut self) -> &mut Self::State;
+    /// Whether node `i` stays where it starts for the whole run. The
+    /// cells whose every node stays are left out of the checks made at
+    /// every step (a patch repair's run holds all but a few per cent of
+    /// the mesh). Default: no node is known to stay.
+    fn held(&self, _i: usize) -> bool {
+        false
+    }
 }
 
 /// Explicit time integrators for `dφ/dt = f u`.
@@ -542,6 +549,15 @@ pub const STALL_WINDOW: usize = 20;
 /// 20 steps advancing it by less than 1e-3 in all are 500 times shorter.
 pub const STALL_ADVANCE: f64 = 1e-3;
 
+/// With a budget of steps ([`DeformOptions::max_steps`]), a run is also
+/// ended at the end of every window of this many accepted steps whose
+/// pace, kept for the rest of the budget, would not reach t = 1. Why: a
+/// run the step control slows to a crawl takes far longer to meet
+/// [`STALL_WINDOW`]'s rule than to show it cannot finish (measured on the
+/// 1e-5 extruded layer's patch at p = 2: t = 0.405 after 16 steps, then
+/// 44 more steps and 90 s to reach 0.420).
+pub const PACE_WINDOW: usize = 10;
+
 /// Up to these many unknowns a solve that failed may turn to a Cholesky
 /// factor ([`DeformOptions::factor_limit`]), if its symbolic analysis
 /// says it fits ([`DeformOptions::factor_bytes`]). The bound only keeps
@@ -619,6 +635,44 @@ pub struct Deformation<M: Q1Mesh<D, N> = crate::mesh::QuadMesh, const D: usize =
     back: Back<<M::Boundary as BoundaryModel<D>>::State, D>,
     /// The step count and t at the start of the stall rule's window.
     mark: (usize, f64),
+    /// The step count and t at the start of the pace rule's window
+    /// ([`PACE_WINDOW`]).
+    pace_mark: (usize, f64),
+    /// The cells some node of which may move, where others never do.
+    moving: Option<Moving<N>>,
+}
+
+/// The cells of a run some node of which may move ([`BoundaryModel::held`]):
+/// the per-step checks (validity, the step control's strain) look at
+/// these only. The others keep their start, which was checked valid, and
+/// a change of their Jacobians of exactly 1.
+struct Moving<const N: usize> {
+    /// Their indices in the mesh, ascending.
+    ids: Vec<usize>,
+    /// Their nodes.
+    cells: Vec<[usize; N]>,
+    /// [`normalise_with`]'s sums over the other cells, where g does not
+    /// change (a uniform field): the normalisation then sums over the
+    /// moving cells only.
+    still: Option<(f64, f64)>,
+}
+
+/// The cells of `cells` at `nodes` with a node not `held`, None if that
+/// is all.
+fn moving_cells<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[f64; D]], field: &JacobianField, held: impl Fn(usize) -> bool) -> Result<Option<Moving<N>>, DeformError> {
+    let moves: Vec<bool> = cells.iter().map(|cell| !cell.iter().all(|&v| held(v))).collect();
+    let ids: Vec<usize> = (0..cells.len()).filter(|&c| moves[c]).collect();
+    if ids.len() == cells.len() {
+        return Ok(None);
+    }
+    let still = if field.is_uniform() {
+        let cells: Vec<[usize; N]> = (0..cells.len()).filter(|&c| !moves[c]).map(|c| cells[c]).collect();
+        let sums = cells.chunks(crate::jacobian::NORMALISE_CHUNK).map(|c| crate::jacobian::chunk_sums(c, nodes, field, 0.0)).collect::<Result<Vec<_>, _>>()?;
+        Some(sums.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1)))
+    } else {
+        None
+    };
+    Ok(Some(Moving { cells: ids.iter().map(|&c| cells[c]).collect(), ids, still }))
 }
 
 /// Where the last accepted step started, and what solver failures have
@@ -684,6 +738,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         boundary.fill_constraints(0.0, mesh.nodes(), |_| 1.0, &mut constraints);
         let mut system = DivCurlSystem::new(mesh.cells(), &constraints);
         system.div_weight = options.div_weight;
+        let moving = moving_cells(mesh.cells(), mesh.nodes(), &field, |v| boundary.held(v))?;
         let t0 = Instant::now();
         solver.analyze(system.matrix())?;
         let stats = RunStats { analyze: t0.elapsed(), ..Default::default() };
@@ -708,6 +763,8 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             initial_state: boundary.state().clone(),
             back: Back { nodes: mesh.nodes().to_vec(), state: boundary.state().clone(), k1: vec![[0.0; D]; n], t: 0.0, h: 0.0, valid: false, cap: f64::INFINITY, failed_at: 0.0, retakes: 0, solved: None },
             mark: (0, 0.0),
+            pace_mark: (0, 0.0),
+            moving,
             mesh,
             boundary,
             field,
@@ -728,6 +785,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         self.back.cap = f64::INFINITY;
         self.back.retakes = 0;
         self.mark = (self.stats.steps, 0.0);
+        self.pace_mark = self.mark;
     }
 
     /// The boundary parts.
@@ -936,8 +994,18 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             return Ok(());
         }
         let (steps, t) = (self.stats.steps, self.t);
-        if let Some(max) = self.options.max_steps.filter(|&m| steps >= m) {
-            return Err(DeformError::Stalled { t, steps, why: format!("its budget of {max} steps is spent") });
+        if let Some(max) = self.options.max_steps {
+            if steps >= max {
+                return Err(DeformError::Stalled { t, steps, why: format!("its budget of {max} steps is spent") });
+            }
+            if steps >= self.pace_mark.0 + PACE_WINDOW {
+                let advance = t - self.pace_mark.1;
+                let reach = t + advance / PACE_WINDOW as f64 * (max - steps) as f64;
+                if reach < 1.0 {
+                    return Err(DeformError::Stalled { t, steps, why: format!("its last {PACE_WINDOW} steps advanced t by {advance:.2e} in all; at that pace the {} steps left of its budget of {max} would end at t = {reach:.4}", max - steps) });
+                }
+                self.pace_mark = (steps, t);
+            }
         }
         if steps >= self.mark.0 + STALL_WINDOW {
             let advance = t - self.mark.1;
@@ -988,7 +1056,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         *self.mesh.nodes_mut() = nodes;
         let failure = match result {
             Ok(h) => {
-                let bad = self.mesh.invalid_cells(&self.next);
+                let bad = self.invalid_cells(&self.next);
                 if bad.is_empty() && !(self.too_strained() && control) {
                     std::mem::swap(self.mesh.nodes_mut(), &mut self.next);
                     // keep this step's start by rotating buffers, no copy:
@@ -1013,6 +1081,19 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         failure
     }
 
+    /// The cells the per-step checks look at ([`Moving`]).
+    fn checked_cells(&self) -> &[[usize; N]] {
+        self.moving.as_ref().map_or(self.mesh.cells(), |m| &m.cells)
+    }
+
+    /// The cells not certified valid at `nodes`, among those that move.
+    fn invalid_cells(&self, nodes: &[[f64; D]]) -> Vec<usize> {
+        match &self.moving {
+            Some(m) => crate::quality::certify::invalid_cells(&m.cells, nodes).into_iter().map(|k| m.ids[k]).collect(),
+            None => self.mesh.invalid_cells(nodes),
+        }
+    }
+
     /// With the step control on, whether the step just computed changed
     /// some corner's Jacobian by more than it allows. This sees what the
     /// velocity alone does not: the put-back onto curved walls, which
@@ -1021,7 +1102,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
     /// on the cylinder and ball meshes of the benchmarks in one step).
     fn too_strained(&mut self) -> bool {
         let Some(c) = self.options.max_strain else { return false };
-        let (lo, hi) = strain::corner_ratio_range(self.mesh.cells(), self.mesh.nodes(), &self.next);
+        let (lo, hi) = strain::corner_ratio_range(self.checked_cells(), self.mesh.nodes(), &self.next);
         self.strain = (1.0 - lo).max(hi - 1.0);
         self.strain > c
     }
@@ -1048,7 +1129,7 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
             self.k1_current = true;
         }
         let h = match self.options.max_strain {
-            Some(c) => strain::max_step(self.mesh.cells(), nodes, &self.k1, c, h),
+            Some(c) => strain::max_step(self.checked_cells(), nodes, &self.k1, c, h),
             None => h,
         };
         for ((o, x), k) in self.next.iter_mut().zip(nodes).zip(&self.k1) {
@@ -1079,7 +1160,11 @@ impl<M: Q1Mesh<D, N>, const D: usize, const N: usize> Deformation<M, D, N> {
         let t0 = Instant::now();
         self.boundary.velocities(&mut self.bvel);
         let flux = self.mesh.flux_points(nodes, &self.bvel);
-        let norm = normalise(self.mesh.cells(), nodes, &self.field, t, self.volume0, flux).map_err(DeformError::from)?;
+        let norm = match &self.moving {
+            Some(Moving { cells, still: Some(still), .. }) => normalise_with(cells, nodes, &self.field, (t, self.volume0), flux, *still),
+            _ => normalise(self.mesh.cells(), nodes, &self.field, t, self.volume0, flux),
+        }
+        .map_err(DeformError::from)?;
         let field = &self.field;
         // f at the nodes, checked: the nodes may have moved where g ≤ 0
         for (f, x) in self.f_nodes.iter_mut().zip(nodes) {

@@ -89,8 +89,9 @@ fn det_factor_coefficients<const D: usize>(m: &[[f64; D]; D]) -> [f64; 3] {
 /// points, so each such piece is searched by bisection for a crossing.
 fn first_exit([a1, a2, a3]: [f64; 3], c: f64, h_max: f64) -> f64 {
     let q = |h: f64| ((a3 * h + a2) * h + a1) * h;
-    // critical points: 3a₃h² + 2a₂h + a₁ = 0
-    let mut cuts = vec![0.0];
+    // critical points: 3a₃h² + 2a₂h + a₁ = 0 (on the stack: this runs at
+    // every corner of every moving cell at every step)
+    let mut cuts: smallvec::SmallVec<[f64; 4]> = smallvec::smallvec![0.0];
     let (qa, qb, qc) = (3.0 * a3, 2.0 * a2, a1);
     if qa != 0.0 {
         let disc = qb * qb - 4.0 * qa * qc;
@@ -101,7 +102,7 @@ fn first_exit([a1, a2, a3]: [f64; 3], c: f64, h_max: f64) -> f64 {
     } else if qb != 0.0 {
         cuts.push(-qc / qb);
     }
-    cuts.retain(|&h| h >= 0.0 && h < h_max);
+    cuts.retain(|h| *h >= 0.0 && *h < h_max);
     cuts.sort_by(f64::total_cmp);
     cuts.push(h_max);
     for w in cuts.windows(2) {

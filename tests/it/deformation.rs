@@ -373,6 +373,33 @@ fn quarter_disk_ending(edit: impl Fn(&mut deformesh::deform::DeformOptions)) -> 
     (e, d.stats.steps)
 }
 
+/// A run with a budget of steps whose pace over a window of steps, kept
+/// for the rest of the budget, would not reach t = 1 ends at the end of
+/// that window (issue 42). The quarter disk's 40 nominal steps advance t
+/// by 1/40 each: with a budget of 39, at step 10 (t = 0.25) the 29 steps
+/// left would reach 0.975; with 41 they reach 1.025, and the run ends at
+/// t = 1 after 40 steps.
+#[test]
+fn a_run_too_slow_for_its_budget_ends_with_its_pace() {
+    use deformesh::deform::{DeformError, PACE_WINDOW};
+    assert_eq!(PACE_WINDOW, 10, "the figures below are for a window of 10 steps");
+    let (e, steps) = quarter_disk_ending(|o| o.max_steps = Some(39));
+    match &e {
+        DeformError::Stalled { t, why, .. } => {
+            assert!((t - 0.25).abs() < 1e-12, "t = {t}");
+            assert!(why.contains("at that pace the 29 steps left of its budget of 39 would end at t = 0.9750"), "{why}");
+        }
+        other => panic!("not a stall: {other}"),
+    }
+    assert_eq!(steps, 10);
+    let case = Case::parse(DEMO_CASE, "quarter_disk").unwrap();
+    let mut s = case.setup("quarter_disk", Path::new(".")).unwrap();
+    s.options.max_steps = Some(41);
+    let mut d = Deformation::new(s.mesh, s.parts, s.field, s.options).unwrap();
+    d.run(&[], |_| {}, |_| {}).expect("a budget the pace meets");
+    assert_eq!(d.stats.steps, 40);
+}
+
 /// Every run ends (issue 42): a step control that accepts ever smaller
 /// steps (here one allowing a change of 1e-9 of a corner's Jacobian per
 /// step) ends after one window of steps that no longer advance t, with
