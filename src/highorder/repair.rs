@@ -238,7 +238,9 @@ where
     let mut last = None;
     for steps in steps {
         let max_strain = opts.steps.is_none().then_some(opts.step_change);
-        let mut flow = DeformOptions { steps, max_strain, max_steps: Some(PATCH_MAX_STEPS), ..opts.flow.clone() };
+        // (steps the user gave are taken whole, as on the whole mesh)
+        let budget = opts.steps.map_or(PATCH_MAX_STEPS, |n| PATCH_MAX_STEPS.max(2 * n));
+        let mut flow = DeformOptions { steps, max_strain, max_steps: Some(budget), ..opts.flow.clone() };
         flow.solver = flow.solver.resolved(D, D * free, flow.factor_limit);
         let start = sub.refine_mesh().with_patch(patch.clone());
         let mut def = Deformation::<RefineMesh<M, D>, D, N>::new(start, parts.to_vec(), JacobianField::uniform(), flow)?;
