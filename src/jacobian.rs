@@ -425,7 +425,7 @@ pub fn lift<const D: usize>(x: [f64; D]) -> Point3 {
 }
 
 /// Cells per parallel chunk of [`normalise`].
-pub const NORMALISE_CHUNK: usize = 1024;
+const NORMALISE_CHUNK: usize = 1024;
 
 /// Computes c(t) and c'(t) on the mesh of Ω_t given by `cells` at
 /// positions `nodes`: `volume0` = |Ω₀|, `boundary` the quadrature of the
@@ -456,8 +456,7 @@ pub fn normalise_with<const D: usize, const N: usize>(
     // fixed chunks summed in order: rayon's own reduction splits where
     // work is stolen, so its sum differed from run to run in the last
     // digits, and a settling flow (water_wave_p3) magnified that to 1e-5
-    let partial = cells.par_chunks(NORMALISE_CHUNK).map(|chunk| chunk_sums(chunk, nodes, field, t)).collect::<Result<Vec<(f64, f64)>, JacobianError>>()?;
-    let (inv_g, dt_term) = partial.iter().fold(base, |a, b| (a.0 + b.0, a.1 + b.1));
+    let (inv_g, dt_term) = cell_sums(cells, nodes, field, t, base)?;
     let mut flux = 0.0;
     for (x, vn_ds) in boundary {
         flux += vn_ds / field.g_checked(lift(x), t)?.0;
@@ -465,9 +464,17 @@ pub fn normalise_with<const D: usize, const N: usize>(
     Ok(Normalisation { t, c: inv_g / volume0, c_dot: (dt_term + flux) / volume0 })
 }
 
+/// `base` plus the sums of [`normalise`] over `cells`, ∫ 1/g and
+/// −∫ ∂g/∂t / g², in chunks of [`NORMALISE_CHUNK`] added in order: the
+/// same to the last digit from run to run.
+pub fn cell_sums<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[f64; D]], field: &JacobianField, t: f64, base: (f64, f64)) -> Result<(f64, f64), JacobianError> {
+    let partial = cells.par_chunks(NORMALISE_CHUNK).map(|chunk| chunk_sums(chunk, nodes, field, t)).collect::<Result<Vec<(f64, f64)>, JacobianError>>()?;
+    Ok(partial.iter().fold(base, |a, b| (a.0 + b.0, a.1 + b.1)))
+}
+
 /// The sums of [`normalise`] over the cells of one chunk: ∫ 1/g and
 /// −∫ ∂g/∂t / g².
-pub fn chunk_sums<const D: usize, const N: usize>(chunk: &[[usize; N]], nodes: &[[f64; D]], field: &JacobianField, t: f64) -> Result<(f64, f64), JacobianError> {
+fn chunk_sums<const D: usize, const N: usize>(chunk: &[[usize; N]], nodes: &[[f64; D]], field: &JacobianField, t: f64) -> Result<(f64, f64), JacobianError> {
     let mut acc = (0.0, 0.0);
     for cell in chunk {
         let p = cell.map(|n| nodes[n]);

@@ -660,19 +660,16 @@ struct Moving<const N: usize> {
 /// The cells of `cells` at `nodes` with a node not `held`, None if that
 /// is all.
 fn moving_cells<const D: usize, const N: usize>(cells: &[[usize; N]], nodes: &[[f64; D]], field: &JacobianField, held: impl Fn(usize) -> bool) -> Result<Option<Moving<N>>, DeformError> {
-    let moves: Vec<bool> = cells.iter().map(|cell| !cell.iter().all(|&v| held(v))).collect();
-    let ids: Vec<usize> = (0..cells.len()).filter(|&c| moves[c]).collect();
-    if ids.len() == cells.len() {
+    let moves = |cell: &[usize; N]| !cell.iter().all(|&v| held(v));
+    // (every run asks: where every cell moves, as in the paper's cases,
+    // nothing is kept)
+    if cells.iter().all(moves) {
         return Ok(None);
     }
-    let still = if field.is_uniform() {
-        let cells: Vec<[usize; N]> = (0..cells.len()).filter(|&c| !moves[c]).map(|c| cells[c]).collect();
-        let sums = cells.chunks(crate::jacobian::NORMALISE_CHUNK).map(|c| crate::jacobian::chunk_sums(c, nodes, field, 0.0)).collect::<Result<Vec<_>, _>>()?;
-        Some(sums.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1)))
-    } else {
-        None
-    };
-    Ok(Some(Moving { cells: ids.iter().map(|&c| cells[c]).collect(), ids, still }))
+    let (moving, still): (Vec<usize>, Vec<usize>) = (0..cells.len()).partition(|&c| moves(&cells[c]));
+    let picked = |ids: &[usize]| ids.iter().map(|&c| cells[c]).collect::<Vec<_>>();
+    let still = if field.is_uniform() { Some(crate::jacobian::cell_sums(&picked(&still), nodes, field, 0.0, (0.0, 0.0))?) } else { None };
+    Ok(Some(Moving { cells: picked(&moving), ids: moving, still }))
 }
 
 /// Where the last accepted step started, and what solver failures have
